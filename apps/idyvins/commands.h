@@ -1,0 +1,15 @@
+#pragma once
+// Subcommands of the `idyvins` command line. Each registers itself on the app
+// and returns its exit code through the callback it installs.
+
+#include <CLI/CLI.hpp>
+
+namespace idyvins::app {
+
+/// Exit codes shared by all subcommands.
+enum ExitCode : int { kOk = 0, kInputError = 1, kUsageError = 2, kInternalError = 3 };
+
+/// `idyvins info DATASET [--config CFG] [--json]`.
+void registerInfo(CLI::App& app, int& exit_code);
+
+}  // namespace idyvins::app

@@ -1,0 +1,33 @@
+// idyvins: stereo visual-inertial odometry for dynamic scenes (IDY-VINS).
+
+#include <cstdio>
+#include <exception>
+
+#include "commands.h"
+#include "core/error.h"
+
+int main(int argc, char** argv) {
+  using namespace idyvins::app;
+  CLI::App app{
+      "idyvins: stereo visual-inertial odometry for scenes with moving objects.\n"
+      "Implements IDY-VINS (inertial motion prior, dynamic landmark elimination and\n"
+      "self-adaptive bundle adjustment) on a VINS-Fusion-class estimator.\n"
+      "Configs use the VINS-Fusion format; datasets are EuRoC ASL folders.",
+      "idyvins"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "idyvins 0.1.0");
+  int exit_code = kOk;
+  registerInfo(app, exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const idyvins::InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kInputError;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "internal error: %s\n", e.what());
+    return kInternalError;
+  }
+  return exit_code;
+}

@@ -1,0 +1,81 @@
+#pragma once
+// VINS-Fusion-format configuration (OpenCV FileStorage YAML + camodocal camera
+// files), loaded once, validated, and passed down as a value (no globals).
+
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "camera/camera_params.h"
+
+namespace idyvins {
+
+/// Feature rejection mode of the whole system (DESIGN §4.8).
+enum class Mode { kBaseline, kRansac, kSeg, kIdy, kIdyPre, kIdyBa };
+
+/// "baseline", "ransac", "seg", "idy", "idy-pre", "idy-ba".
+const char* toString(Mode mode);
+/// Parses a mode name; false if unknown.
+bool parseMode(const std::string& text, Mode& mode);
+/// All mode names, separated by '|', for messages and --help.
+std::string modeNames();
+
+/// IMU noise model (continuous-time densities, VINS-Fusion convention).
+struct ImuNoise {
+  double acc_n = 0;   ///< accelerometer white noise, m/s^2/sqrt(Hz)
+  double gyr_n = 0;   ///< gyroscope white noise, rad/s/sqrt(Hz)
+  double acc_w = 0;   ///< accelerometer bias random walk, m/s^3/sqrt(Hz)
+  double gyr_w = 0;   ///< gyroscope bias random walk, rad/s^2/sqrt(Hz)
+  double g_norm = 9.81;  ///< gravity magnitude, m/s^2
+};
+
+/// Front-end (feature tracker) options.
+struct TrackerOptions {
+  int max_cnt = 150;          ///< features kept per frame
+  double min_dist = 30;       ///< px between features
+  double f_threshold = 1.0;   ///< px, F-matrix RANSAC threshold (mode ransac)
+  bool flow_back = true;      ///< forward-backward KLT check
+};
+
+/// Back-end (sliding-window solver) options.
+struct SolverOptions {
+  double max_solver_time_s = 0.04;  ///< per solve, seconds
+  int max_num_iterations = 8;
+  double keyframe_parallax_px = 10.0;  ///< mean parallax for a new keyframe, pixels
+};
+
+/// Parameters of the paper's method (DESIGN §4).
+struct DynamicOptions {
+  Mode mode = Mode::kIdy;
+  double lambda_dy = 4.0;    ///< px^2, elimination threshold (eq. 4)
+  double lambda_dy_c = 1.0;  ///< px^2, candidate threshold (eq. 6)
+};
+
+/// Whole-system configuration.
+struct Config {
+  std::string path;  ///< the config file it was read from
+  bool use_imu = true;
+  int num_cam = 2;
+  int image_width = 0, image_height = 0;
+  std::vector<camera::CameraParams> cams;  ///< cam0 (left), cam1 (right)
+  std::vector<std::string> cam_paths;      ///< resolved camodocal file paths
+  std::vector<Eigen::Isometry3d> T_b_c;    ///< body_T_camX: maps camera points into the body
+  ImuNoise imu;
+  TrackerOptions tracker;
+  SolverOptions solver;
+  bool estimate_td = false;
+  double td_s = 0.0;  ///< image clock + td = IMU clock, seconds
+  DynamicOptions dynamic;
+};
+
+/// Reads a camodocal camera file (PINHOLE or KANNALA_BRANDT). Throws InputError.
+camera::CameraParams loadCameraFile(const std::string& path);
+
+/// Reads and validates a VINS-Fusion config; camX_calib paths resolve against
+/// the config's folder. Throws InputError naming file, line and expectation.
+Config loadConfig(const std::string& path);
+
+/// Multi-line, human-readable listing of every value (for `--verbose` / info).
+std::string describe(const Config& config);
+
+}  // namespace idyvins

@@ -1,0 +1,37 @@
+#pragma once
+// Counts, rates, spans and gaps of a dataset's streams (what `idyvins info` prints).
+
+#include <string>
+#include <vector>
+
+#include "io/euroc_dataset.h"
+
+namespace idyvins::io {
+
+/// Statistics of one time-stamped stream.
+struct StreamStats {
+  std::size_t count = 0;
+  TimeNs first_ns = 0, last_ns = 0;
+  double span_s = 0;        ///< last - first
+  double rate_hz = 0;       ///< 1 / median interval
+  double max_gap_s = 0;     ///< largest interval
+  std::size_t gaps = 0;     ///< intervals longer than 1.5x the median
+};
+
+/// Computes stream statistics from increasing time stamps.
+StreamStats streamStats(const std::vector<TimeNs>& stamps);
+
+/// Statistics of every stream of a EuRoC dataset.
+struct DatasetSummary {
+  StreamStats imu, cam0, cam1, pairs, groundtruth;
+  std::size_t unmatched0 = 0, unmatched1 = 0;
+  std::size_t unmatched_missing_image = 0;  ///< unmatched rows whose PNG is absent
+  bool stereo = false, has_groundtruth = false;
+  double imu_before_first_frame_s = 0;  ///< first frame time - first IMU time
+  double imu_after_last_frame_s = 0;    ///< last IMU time - last frame time
+};
+
+/// Summarizes a dataset.
+DatasetSummary summarize(const EurocDataset& dataset);
+
+}  // namespace idyvins::io

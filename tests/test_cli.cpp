@@ -1,0 +1,102 @@
+// Runs the `idyvins` binary: every subcommand's --help, `info` on the real
+// EuRoC excerpt, and the one-line error + exit code on bad input.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
+
+#include "test_util.h"
+
+namespace {
+
+struct Result {
+  int code = -1;
+  std::string out;  ///< stdout and stderr
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(IDYVINS_BINARY) + " " + args + " 2>&1";
+  Result r;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf{};
+  std::size_t n = 0;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
+  const int status = pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+const std::string kMicro = idyvins::test::sharedData("euroc_v101_micro");
+
+TEST(Cli, HelpForEverySubcommand) {
+  const Result top = run("--help");
+  EXPECT_EQ(top.code, 0);
+  EXPECT_NE(top.out.find("info"), std::string::npos);
+  for (const char* sub : {"info"}) {
+    const Result r = run(std::string(sub) + " --help");
+    EXPECT_EQ(r.code, 0) << sub;
+    EXPECT_NE(r.out.find("Usage"), std::string::npos) << r.out;
+  }
+}
+
+TEST(Cli, NoSubcommandIsAUsageError) {
+  const Result r = run("");
+  EXPECT_NE(r.code, 0);
+}
+
+TEST(Cli, InfoOnRealEurocExcerpt) {
+  const Result r = run("info " + kMicro + " --config " + IDYVINS_SOURCE_DIR +
+                       "/config/euroc/euroc_stereo_imu_config.yaml");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("imu0          29120 samples   200.00 Hz  span  145.595 s"),
+            std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("cam0             95 images     20.00 Hz  span    4.700 s"),
+            std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("cam1             99 images"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("stereo pairs     95 frames"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("cam0 0, cam1 4 rows without a partner"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("95 pairs read, all 752x480"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("valid: yes"), std::string::npos) << r.out;
+}
+
+TEST(Cli, InfoJson) {
+  const Result r = run("info " + kMicro + " --json --skip-images");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("\"count\": 29120"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"unmatched_cam1\": 4"), std::string::npos) << r.out;
+}
+
+TEST(Cli, BadInputIsOneLineAndNonZeroExit) {
+  const Result r = run("info /nonexistent/dataset");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.out, "error: /nonexistent/dataset: dataset folder does not exist\n");
+  const Result c = run("info " + kMicro + " --config /nonexistent/cfg.yaml");
+  EXPECT_EQ(c.code, 1);
+  EXPECT_EQ(c.out, "error: /nonexistent/cfg.yaml: cannot open file (missing or unreadable)\n");
+}
+
+TEST(Cli, ImageSizeDifferentFromConfig) {
+  idyvins::test::TempDir dir;
+  const std::string src = std::string(IDYVINS_SOURCE_DIR) + "/config/euroc/";
+  for (const char* f : {"cam0_pinhole.yaml", "cam1_pinhole.yaml", "euroc_stereo_imu_config.yaml"}) {
+    std::string text = idyvins::test::readFile(src + f);
+    for (const char* from : {"image_width: 752", "image_height: 480"}) {
+      const auto pos = text.find(from);
+      ASSERT_NE(pos, std::string::npos);
+      text.replace(pos, std::string(from).size(),
+                   std::string(from).substr(0, std::string(from).find(':')) +
+                       (from[6] == 'w' ? ": 640" : ": 480"));
+    }
+    idyvins::test::writeFile(dir / f, text);
+  }
+  const Result r = run("info " + kMicro + " --config " + (dir / "euroc_stereo_imu_config.yaml"));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.out.find("cam0/data.csv:2: image "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("is 752x480, expected 640x480"), std::string::npos) << r.out;
+}
+
+}  // namespace

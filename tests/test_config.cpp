@@ -1,0 +1,196 @@
+#include <gtest/gtest.h>
+
+#include <regex>
+
+#include "core/error.h"
+#include "io/config.h"
+#include "test_util.h"
+
+namespace idyvins {
+namespace {
+
+using test::readFile;
+using test::sharedData;
+using test::TempDir;
+using test::writeFile;
+
+std::string configPath(const std::string& rel) {
+  return std::string(IDYVINS_SOURCE_DIR) + "/config/" + rel;
+}
+
+void expectError(const std::function<void()>& f, const std::string& needle) {
+  try {
+    f();
+    FAIL() << "expected InputError containing '" << needle << "'";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
+}
+
+TEST(Config, ReadsViodePublishedCalibration) {
+  const Config c = loadConfig(sharedData("viode_calibration/calibration.yaml"));
+  EXPECT_TRUE(c.use_imu);
+  EXPECT_EQ(c.num_cam, 2);
+  EXPECT_EQ(c.image_width, 752);
+  EXPECT_EQ(c.image_height, 480);
+  ASSERT_EQ(c.cams.size(), 2u);
+  EXPECT_EQ(c.cams[0].type, camera::ModelType::kPinhole);
+  EXPECT_DOUBLE_EQ(c.cams[0].fx, 376.0);
+  EXPECT_DOUBLE_EQ(c.cams[0].cy, 240.0);
+  Eigen::Matrix3d r_expected;
+  r_expected << 0, 0, 1, 1, 0, 0, 0, 1, 0;
+  EXPECT_TRUE(c.T_b_c[0].linear().isApprox(r_expected));
+  EXPECT_NEAR((c.T_b_c[1].translation() - c.T_b_c[0].translation()).norm(), 0.05, 1e-12);
+  EXPECT_DOUBLE_EQ(c.imu.acc_n, 0.2);
+  EXPECT_DOUBLE_EQ(c.imu.gyr_w, 4.0e-5);
+  EXPECT_DOUBLE_EQ(c.imu.g_norm, 9.81007);
+  EXPECT_EQ(c.tracker.max_cnt, 120);
+  EXPECT_TRUE(c.tracker.flow_back);
+  EXPECT_EQ(c.solver.max_num_iterations, 8);
+  // IDY keys are absent in VIODE's file: defaults apply.
+  EXPECT_EQ(c.dynamic.mode, Mode::kIdy);
+  EXPECT_DOUBLE_EQ(c.dynamic.lambda_dy, 4.0);
+  EXPECT_DOUBLE_EQ(c.dynamic.lambda_dy_c, 1.0);
+}
+
+TEST(Config, ShippedConfigsLoad) {
+  for (const char* rel : {"euroc/euroc_stereo_imu_config.yaml", "viode/viode_stereo_imu_config.yaml",
+                          "sim/sim_stereo_imu_config.yaml"}) {
+    SCOPED_TRACE(rel);
+    const Config c = loadConfig(configPath(rel));
+    EXPECT_EQ(c.num_cam, 2);
+    EXPECT_EQ(c.cams.size(), 2u);
+    EXPECT_FALSE(describe(c).empty());
+  }
+}
+
+TEST(Config, EurocConfigMatchesTheDatasetsOwnCalibration) {
+  // The shipped EuRoC config must carry the same intrinsics and extrinsics as the
+  // sensor.yaml files of the real dataset.
+  const Config c = loadConfig(configPath("euroc/euroc_stereo_imu_config.yaml"));
+  EXPECT_DOUBLE_EQ(c.cams[0].fx, 458.654);
+  EXPECT_DOUBLE_EQ(c.cams[0].cy, 248.375);
+  EXPECT_DOUBLE_EQ(c.cams[0].dist[0], -0.28340811);
+  EXPECT_NEAR(c.T_b_c[0].translation().x(), -0.0216401454975, 1e-12);
+  const std::string s = readFile(sharedData("euroc_v101_micro/mav0/cam1/sensor.yaml"));
+  EXPECT_NE(s.find("457.587"), std::string::npos);
+  EXPECT_DOUBLE_EQ(c.cams[1].fx, 457.587);
+  const double baseline = (c.T_b_c[0].inverse() * c.T_b_c[1]).translation().norm();
+  EXPECT_NEAR(baseline, 0.110, 0.002);
+}
+
+/// A minimal valid config + camera in a temp folder; `mutate` edits the config text.
+std::string writeConfig(const TempDir& dir, const std::string& config_text,
+                        const std::string& camera_text) {
+  writeFile(dir / "cam.yaml", camera_text);
+  writeFile(dir / "cfg.yaml", config_text);
+  return dir / "cfg.yaml";
+}
+
+const char* kCamera =
+    "%YAML:1.0\n---\nmodel_type: PINHOLE\ncamera_name: c\nimage_width: 64\nimage_height: 48\n"
+    "distortion_parameters:\n   k1: 0.1\n   k2: 0.0\n   p1: 0.0\n   p2: 0.0\n"
+    "projection_parameters:\n   fx: 50.0\n   fy: 50.0\n   cx: 32.0\n   cy: 24.0\n";
+
+const char* kConfig =
+    "%YAML:1.0\nimu: 1\nnum_of_cam: 1\ncam0_calib: \"cam.yaml\"\nimage_width: 64\n"
+    "image_height: 48\nbody_T_cam0: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: d\n"
+    "   data: [1, 0, 0, 0.1,  0, 1, 0, 0,  0, 0, 1, 0,  0, 0, 0, 1]\n"
+    "acc_n: 0.1\ngyr_n: 0.01\nacc_w: 0.001\ngyr_w: 0.0001\ng_norm: 9.81\n"
+    "max_cnt: 150\nmin_dist: 30\nF_threshold: 1.0\nflow_back: 1\n"
+    "max_solver_time: 0.04\nmax_num_iterations: 8\nkeyframe_parallax: 10.0\n"
+    "mode: ransac\nlambda_dy: 5\n";
+
+std::string replace(std::string s, const std::string& from, const std::string& to) {
+  const auto pos = s.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  return s.replace(pos, from.size(), to);
+}
+
+TEST(Config, MinimalConfigWithRelativeCameraPath) {
+  TempDir dir;
+  const Config c = loadConfig(writeConfig(dir, kConfig, kCamera));
+  EXPECT_EQ(c.num_cam, 1);
+  EXPECT_DOUBLE_EQ(c.cams[0].dist[0], 0.1);
+  EXPECT_DOUBLE_EQ(c.T_b_c[0].translation().x(), 0.1);
+  EXPECT_EQ(c.dynamic.mode, Mode::kRansac);
+  EXPECT_DOUBLE_EQ(c.dynamic.lambda_dy, 5.0);
+  EXPECT_FALSE(c.estimate_td);
+  EXPECT_DOUBLE_EQ(c.td_s, 0.0);
+}
+
+TEST(Config, KannalaBrandtCamera) {
+  TempDir dir;
+  writeFile(dir / "kb.yaml",
+            "%YAML:1.0\n---\nmodel_type: KANNALA_BRANDT\ncamera_name: c\nimage_width: 752\n"
+            "image_height: 480\nprojection_parameters:\n   k2: 0.01\n   k3: -0.002\n   k4: 0.0003\n"
+            "   k5: -0.00004\n   mu: 380.0\n   mv: 381.0\n   u0: 370.0\n   v0: 240.0\n");
+  const auto cam = loadCameraFile(dir / "kb.yaml");
+  EXPECT_EQ(cam.type, camera::ModelType::kKannalaBrandt);
+  EXPECT_DOUBLE_EQ(cam.fx, 380.0);
+  EXPECT_DOUBLE_EQ(cam.fy, 381.0);
+  EXPECT_DOUBLE_EQ(cam.cx, 370.0);
+  EXPECT_DOUBLE_EQ(cam.dist[0], 0.01);
+  EXPECT_DOUBLE_EQ(cam.dist[3], -0.00004);
+}
+
+TEST(Config, MissingFile) {
+  expectError([] { loadConfig("/nonexistent/cfg.yaml"); }, "/nonexistent/cfg.yaml: cannot open");
+}
+
+TEST(Config, MissingRequiredKeyIsNamed) {
+  TempDir dir;
+  const auto path = writeConfig(dir, replace(kConfig, "acc_n: 0.1\n", ""), kCamera);
+  expectError([&] { loadConfig(path); }, "cfg.yaml: missing required key 'acc_n'");
+}
+
+TEST(Config, WrongMatrixSizeNamesTheLine) {
+  TempDir dir;
+  const auto path = writeConfig(dir, replace(kConfig, "rows: 4", "rows: 3"), kCamera);
+  expectError([&] { loadConfig(path); }, "cfg.yaml:7: key 'body_T_cam0': expected a 4x4 matrix");
+  const auto path2 =
+      writeConfig(dir, replace(kConfig, "0, 0, 0, 1]", "0, 0, 1]"), kCamera);
+  expectError([&] { loadConfig(path2); }, "got rows 4, cols 4, 15 values");
+}
+
+TEST(Config, NonRigidTransformRefused) {
+  TempDir dir;
+  const auto path = writeConfig(dir, replace(kConfig, "[1, 0, 0, 0.1", "[2, 0, 0, 0.1"), kCamera);
+  expectError([&] { loadConfig(path); }, "expected a rigid transform");
+}
+
+TEST(Config, UnknownCameraModel) {
+  TempDir dir;
+  const auto path = writeConfig(dir, kConfig, replace(kCamera, "PINHOLE", "MEI"));
+  expectError([&] { loadConfig(path); }, "cam.yaml:3: unknown camera model 'MEI'");
+}
+
+TEST(Config, BadValuesNameKeyAndLine) {
+  TempDir dir;
+  auto path = writeConfig(dir, replace(kConfig, "max_cnt: 150", "max_cnt: lots"), kCamera);
+  expectError([&] { loadConfig(path); }, "cfg.yaml:17: key 'max_cnt': expected an integer, got 'lots'");
+  path = writeConfig(dir, replace(kConfig, "mode: ransac", "mode: magic"), kCamera);
+  expectError([&] { loadConfig(path); }, "key 'mode': expected one of baseline|ransac|seg|idy|idy-pre|idy-ba");
+  path = writeConfig(dir, replace(kConfig, "gyr_n: 0.01", "gyr_n: -0.01"), kCamera);
+  expectError([&] { loadConfig(path); }, "key 'gyr_n': expected a positive value");
+  path = writeConfig(dir, replace(kConfig, "num_of_cam: 1", "num_of_cam: 3"), kCamera);
+  expectError([&] { loadConfig(path); }, "key 'num_of_cam': expected 1 or 2, got 3");
+  path = writeConfig(dir, replace(kConfig, "image_width: 64", "image_width: 640"), kCamera);
+  expectError([&] { loadConfig(path); }, "cam.yaml: image size 64x48 differs from the config's 640x48");
+  path = writeConfig(dir, kConfig, replace(kCamera, "   fx: 50.0\n", ""));
+  expectError([&] { loadConfig(path); }, "cam.yaml: missing required key 'fx'");
+  path = writeConfig(dir, replace(kConfig, "imu: 1\n", "imu: [1\n"), kCamera);
+  expectError([&] { loadConfig(path); }, "cfg.yaml:");
+}
+
+TEST(Config, ModeNames) {
+  Mode m{};
+  for (const char* name : {"baseline", "ransac", "seg", "idy", "idy-pre", "idy-ba"}) {
+    ASSERT_TRUE(parseMode(name, m));
+    EXPECT_STREQ(toString(m), name);
+  }
+  EXPECT_FALSE(parseMode("IDY", m));
+}
+
+}  // namespace
+}  // namespace idyvins
