@@ -9,6 +9,17 @@
 
 namespace idyvins {
 
+/// IMU noise model, with VINS-Fusion's semantics (so that VINS-Fusion configs keep
+/// their tuning): acc_n, gyr_n are standard deviations of one sample's white
+/// noise, acc_w, gyr_w scale the per-step bias random walk (variance acc_w² δt²).
+struct ImuNoise {
+  double acc_n = 0;      ///< accelerometer white noise, m/s^2
+  double gyr_n = 0;      ///< gyroscope white noise, rad/s
+  double acc_w = 0;      ///< accelerometer bias random walk, m/s^3
+  double gyr_w = 0;      ///< gyroscope bias random walk, rad/s^2
+  double g_norm = 9.81;  ///< gravity magnitude, m/s^2
+};
+
 /// One IMU sample in the body (IMU) frame: angular rate [rad/s] and specific force [m/s^2].
 struct ImuSample {
   TimeNs t_ns = 0;

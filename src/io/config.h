@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "camera/camera_params.h"
+#include "core/measurements.h"
 
 namespace idyvins {
 
@@ -19,15 +20,6 @@ const char* toString(Mode mode);
 bool parseMode(const std::string& text, Mode& mode);
 /// All mode names, separated by '|', for messages and --help.
 std::string modeNames();
-
-/// IMU noise model (continuous-time densities, VINS-Fusion convention).
-struct ImuNoise {
-  double acc_n = 0;   ///< accelerometer white noise, m/s^2/sqrt(Hz)
-  double gyr_n = 0;   ///< gyroscope white noise, rad/s/sqrt(Hz)
-  double acc_w = 0;   ///< accelerometer bias random walk, m/s^3/sqrt(Hz)
-  double gyr_w = 0;   ///< gyroscope bias random walk, rad/s^2/sqrt(Hz)
-  double g_norm = 9.81;  ///< gravity magnitude, m/s^2
-};
 
 /// Front-end (feature tracker) options.
 struct TrackerOptions {

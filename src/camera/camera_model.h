@@ -1,0 +1,66 @@
+#pragma once
+// Projection models: pinhole + radial-tangential and equidistant (Kannala-Brandt)
+// fisheye. Points are in the camera frame (x right, y down, z forward); pixels
+// are distorted image coordinates; "normalized" means undistorted (x/z, y/z).
+
+#include <Eigen/Core>
+#include <memory>
+
+#include "camera/camera_params.h"
+
+namespace idyvins::camera {
+
+/// A calibrated camera: project, lift, and the projection Jacobian.
+class CameraModel {
+ public:
+  explicit CameraModel(const CameraParams& params) : params_(params) {}
+  virtual ~CameraModel() = default;
+
+  /// Projects p_c to pixels; false when the point cannot be imaged (behind, or
+  /// past the model's field of view). d_uv_d_p (2x3) is filled when non-null.
+  virtual bool project(const Eigen::Vector3d& p_c, Eigen::Vector2d& uv,
+                       Eigen::Matrix<double, 2, 3>* d_uv_d_p = nullptr) const = 0;
+
+  /// Lifts a pixel to undistorted normalized coordinates (x/z, y/z), iterating
+  /// to 1e-10 or better; false if it does not converge or the ray is not in front.
+  virtual bool liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d& xy) const = 0;
+
+  /// Distorted pixel of a normalized point (x/z, y/z) in front of the camera.
+  bool projectNormalized(const Eigen::Vector2d& xy, Eigen::Vector2d& uv) const {
+    return project(Eigen::Vector3d(xy.x(), xy.y(), 1.0), uv);
+  }
+
+  const CameraParams& params() const { return params_; }
+  /// Mean focal length in pixels (for pixel-unit thresholds on normalized errors).
+  double focal() const { return 0.5 * (params_.fx + params_.fy); }
+
+ protected:
+  CameraParams params_;
+};
+
+/// Pinhole with radial-tangential distortion (camodocal PINHOLE, OpenCV plumb_bob k1 k2 p1 p2).
+class PinholeRadtan final : public CameraModel {
+ public:
+  using CameraModel::CameraModel;
+  bool project(const Eigen::Vector3d& p_c, Eigen::Vector2d& uv,
+               Eigen::Matrix<double, 2, 3>* d_uv_d_p = nullptr) const override;
+  bool liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d& xy) const override;
+  /// Distorts a normalized point; d_xyd_d_xy (2x2) when non-null.
+  Eigen::Vector2d distort(const Eigen::Vector2d& xy, Eigen::Matrix2d* d_xyd_d_xy = nullptr) const;
+};
+
+/// Equidistant fisheye (camodocal KANNALA_BRANDT): r(θ) = θ + k2 θ³ + k3 θ⁵ + k4 θ⁷ + k5 θ⁹.
+class KannalaBrandt final : public CameraModel {
+ public:
+  using CameraModel::CameraModel;
+  bool project(const Eigen::Vector3d& p_c, Eigen::Vector2d& uv,
+               Eigen::Matrix<double, 2, 3>* d_uv_d_p = nullptr) const override;
+  bool liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d& xy) const override;
+  /// Distorted radius r(θ) and its derivative.
+  double radius(double theta, double* d_r_d_theta = nullptr) const;
+};
+
+/// Builds the model the parameters name.
+std::unique_ptr<CameraModel> makeCamera(const CameraParams& params);
+
+}  // namespace idyvins::camera
