@@ -31,6 +31,16 @@ inline Eigen::Vector3d logQuat(const Eigen::Quaterniond& q_in) {
   return theta / n * q.vec();
 }
 
+/// Right Jacobian of SO(3): Exp(φ + δ) ≈ Exp(φ) Exp(Jr(φ) δ).
+inline Eigen::Matrix3d rightJacobian(const Eigen::Vector3d& phi) {
+  const double theta = phi.norm();
+  const Eigen::Matrix3d K = hat(phi);
+  if (theta < 1e-6) return Eigen::Matrix3d::Identity() - 0.5 * K + K * K / 6.0;
+  const double t2 = theta * theta;
+  return Eigen::Matrix3d::Identity() - (1.0 - std::cos(theta)) / t2 * K +
+         (theta - std::sin(theta)) / (t2 * theta) * K * K;
+}
+
 /// Small-angle quaternion [1, θ/2] (normalized), as used by midpoint integration.
 inline Eigen::Quaterniond deltaQ(const Eigen::Vector3d& theta) {
   return Eigen::Quaterniond(1.0, 0.5 * theta.x(), 0.5 * theta.y(), 0.5 * theta.z()).normalized();

@@ -1,0 +1,131 @@
+#include "backend/projection_factors.h"
+
+#include <cmath>
+
+#include "core/so3.h"
+
+namespace idyvins::backend {
+
+using Eigen::Matrix3d;
+using Eigen::Quaterniond;
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+using PoseJac = Eigen::Matrix<double, 2, 7, Eigen::RowMajor>;
+
+namespace {
+
+/// d(x/z, y/z)/d(x, y, z), pre-multiplied by the scalar sqrt information.
+Eigen::Matrix<double, 2, 3> reduceJacobian(const Vector3d& p, double sqrt_info) {
+  Eigen::Matrix<double, 2, 3> r;
+  const double iz = 1.0 / p.z();
+  r << iz, 0, -p.x() * iz * iz, 0, iz, -p.y() * iz * iz;
+  return sqrt_info * r;
+}
+
+/// The two-frame case shared by the one-camera and two-camera factors.
+bool evaluateTwoFrame(double const* const* parameters, double* residuals, double** jacobians,
+                      const Vector3d& pts_i, const Vector3d& pts_j, const Extrinsic& a,
+                      const Extrinsic& b, const ProjectionWeight& weight) {
+  const Eigen::Map<const Vector3d> Pi(parameters[0]);
+  const Quaterniond Qi = Eigen::Map<const Quaterniond>(parameters[0] + 3).normalized();
+  const Eigen::Map<const Vector3d> Pj(parameters[1]);
+  const Quaterniond Qj = Eigen::Map<const Quaterniond>(parameters[1] + 3).normalized();
+  const double inv_dep = parameters[2][0];
+
+  const Vector3d pts_cam_i = pts_i / inv_dep;
+  const Vector3d pts_imu_i = a.q_b_c * pts_cam_i + a.t_b_c;
+  const Vector3d pts_w = Qi * pts_imu_i + Pi;
+  const Vector3d pts_imu_j = Qj.conjugate() * (pts_w - Pj);
+  const Vector3d pts_cam_j = b.q_b_c.conjugate() * (pts_imu_j - b.t_b_c);
+  const double sqrt_info = weight.sqrtInfo();
+  Eigen::Map<Vector2d> r(residuals);
+  r = sqrt_info * (pts_cam_j.head<2>() / pts_cam_j.z() - pts_j.head<2>());
+  if (!jacobians) return true;
+
+  const Matrix3d Ri = Qi.toRotationMatrix(), Rj = Qj.toRotationMatrix();
+  const Matrix3d Rca_b = a.q_b_c.toRotationMatrix();
+  const Matrix3d Rb_cb_T = b.q_b_c.conjugate().toRotationMatrix();
+  const Eigen::Matrix<double, 2, 3> reduce = reduceJacobian(pts_cam_j, sqrt_info);
+  if (jacobians[0]) {
+    Eigen::Map<PoseJac> J(jacobians[0]);
+    Eigen::Matrix<double, 3, 6> jaco;
+    jaco.leftCols<3>() = Rb_cb_T * Rj.transpose();
+    jaco.rightCols<3>() = Rb_cb_T * Rj.transpose() * Ri * -hat(pts_imu_i);
+    J.leftCols<6>() = reduce * jaco;
+    J.rightCols<1>().setZero();
+  }
+  if (jacobians[1]) {
+    Eigen::Map<PoseJac> J(jacobians[1]);
+    Eigen::Matrix<double, 3, 6> jaco;
+    jaco.leftCols<3>() = -Rb_cb_T * Rj.transpose();
+    jaco.rightCols<3>() = Rb_cb_T * hat(pts_imu_j);
+    J.leftCols<6>() = reduce * jaco;
+    J.rightCols<1>().setZero();
+  }
+  if (jacobians[2]) {
+    Eigen::Map<Vector2d> J(jacobians[2]);
+    J = reduce * Rb_cb_T * Rj.transpose() * Ri * Rca_b * pts_i * (-1.0 / (inv_dep * inv_dep));
+  }
+  return true;
+}
+
+Vector3d homogeneous(const Vector2d& xy) { return Vector3d(xy.x(), xy.y(), 1.0); }
+
+}  // namespace
+
+double ProjectionWeight::sqrtInfo() const {
+  const double base = focal_px / sigma_px;
+  return info_scale ? base * std::sqrt(*info_scale) : base;
+}
+
+Vector3d transferPoint(const Vector3d& pts_i, double inv_depth, const Vector3d& p_i,
+                       const Quaterniond& q_i, const Vector3d& p_j, const Quaterniond& q_j,
+                       const Extrinsic& cam_a, const Extrinsic& cam_b) {
+  const Vector3d pts_w = q_i * (cam_a.q_b_c * (pts_i / inv_depth) + cam_a.t_b_c) + p_i;
+  return cam_b.q_b_c.conjugate() * (q_j.conjugate() * (pts_w - p_j) - cam_b.t_b_c);
+}
+
+ProjectionTwoFrameOneCam::ProjectionTwoFrameOneCam(const Vector2d& xy_i, const Vector2d& xy_j,
+                                                   const Extrinsic& T_b_c,
+                                                   const ProjectionWeight& weight)
+    : pts_i_(homogeneous(xy_i)), pts_j_(homogeneous(xy_j)), ex_(T_b_c), weight_(weight) {}
+
+bool ProjectionTwoFrameOneCam::Evaluate(double const* const* parameters, double* residuals,
+                                        double** jacobians) const {
+  return evaluateTwoFrame(parameters, residuals, jacobians, pts_i_, pts_j_, ex_, ex_, weight_);
+}
+
+ProjectionTwoFrameTwoCam::ProjectionTwoFrameTwoCam(const Vector2d& xy_i, const Vector2d& xy_j_right,
+                                                   const Extrinsic& T_b_c0, const Extrinsic& T_b_c1,
+                                                   const ProjectionWeight& weight)
+    : pts_i_(homogeneous(xy_i)), pts_j_(homogeneous(xy_j_right)), ex0_(T_b_c0), ex1_(T_b_c1),
+      weight_(weight) {}
+
+bool ProjectionTwoFrameTwoCam::Evaluate(double const* const* parameters, double* residuals,
+                                        double** jacobians) const {
+  return evaluateTwoFrame(parameters, residuals, jacobians, pts_i_, pts_j_, ex0_, ex1_, weight_);
+}
+
+ProjectionOneFrameTwoCam::ProjectionOneFrameTwoCam(const Vector2d& xy_left, const Vector2d& xy_right,
+                                                   const Extrinsic& T_b_c0, const Extrinsic& T_b_c1,
+                                                   const ProjectionWeight& weight)
+    : pts_i_(homogeneous(xy_left)), pts_j_(homogeneous(xy_right)), ex0_(T_b_c0), ex1_(T_b_c1),
+      weight_(weight) {}
+
+bool ProjectionOneFrameTwoCam::Evaluate(double const* const* parameters, double* residuals,
+                                        double** jacobians) const {
+  const double inv_dep = parameters[0][0];
+  const Vector3d pts_imu = ex0_.q_b_c * (pts_i_ / inv_dep) + ex0_.t_b_c;
+  const Vector3d pts_cam_j = ex1_.q_b_c.conjugate() * (pts_imu - ex1_.t_b_c);
+  const double sqrt_info = weight_.sqrtInfo();
+  Eigen::Map<Vector2d> r(residuals);
+  r = sqrt_info * (pts_cam_j.head<2>() / pts_cam_j.z() - pts_j_.head<2>());
+  if (jacobians && jacobians[0]) {
+    Eigen::Map<Vector2d> J(jacobians[0]);
+    J = reduceJacobian(pts_cam_j, sqrt_info) * ex1_.q_b_c.conjugate().toRotationMatrix() *
+        ex0_.q_b_c.toRotationMatrix() * pts_i_ * (-1.0 / (inv_dep * inv_dep));
+  }
+  return true;
+}
+
+}  // namespace idyvins::backend

@@ -1,0 +1,83 @@
+#pragma once
+// Reprojection factors with inverse depth (VINS-Fusion's three): residuals on the
+// normalized image plane, weighted by focal/σ_px (σ_px = 1.5 px by default) and by
+// a per-observation information scale that may change at run time.
+
+#include <ceres/sized_cost_function.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace idyvins::backend {
+
+/// Camera-to-body extrinsic T_b_c.
+struct Extrinsic {
+  Eigen::Quaterniond q_b_c = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d t_b_c = Eigen::Vector3d::Zero();
+};
+
+/// Weighting of a projection residual: sqrt_info = focal/σ_px · sqrt(*info_scale).
+/// info_scale points at a value the estimator owns and may change between solver
+/// iterations (dynamic-candidate weights 1/m_j, DESIGN §4.5); null means 1.
+struct ProjectionWeight {
+  double focal_px = 460.0;
+  double sigma_px = 1.5;
+  const double* info_scale = nullptr;
+  double sqrtInfo() const;
+};
+
+/// Left camera in frame i to left camera in frame j.
+/// Blocks: pose_i (7), pose_j (7), inv_depth (1).
+class ProjectionTwoFrameOneCam final : public ceres::SizedCostFunction<2, 7, 7, 1> {
+ public:
+  ProjectionTwoFrameOneCam(const Eigen::Vector2d& xy_i, const Eigen::Vector2d& xy_j,
+                           const Extrinsic& T_b_c, const ProjectionWeight& weight);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  Eigen::Vector3d pts_i_, pts_j_;
+  Extrinsic ex_;
+  ProjectionWeight weight_;
+};
+
+/// Left camera in frame i to right camera in frame j (i != j).
+/// Blocks: pose_i (7), pose_j (7), inv_depth (1).
+class ProjectionTwoFrameTwoCam final : public ceres::SizedCostFunction<2, 7, 7, 1> {
+ public:
+  ProjectionTwoFrameTwoCam(const Eigen::Vector2d& xy_i, const Eigen::Vector2d& xy_j_right,
+                           const Extrinsic& T_b_c0, const Extrinsic& T_b_c1,
+                           const ProjectionWeight& weight);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  Eigen::Vector3d pts_i_, pts_j_;
+  Extrinsic ex0_, ex1_;
+  ProjectionWeight weight_;
+};
+
+/// Left camera to right camera in the same frame. Block: inv_depth (1).
+class ProjectionOneFrameTwoCam final : public ceres::SizedCostFunction<2, 1> {
+ public:
+  ProjectionOneFrameTwoCam(const Eigen::Vector2d& xy_left, const Eigen::Vector2d& xy_right,
+                           const Extrinsic& T_b_c0, const Extrinsic& T_b_c1,
+                           const ProjectionWeight& weight);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  Eigen::Vector3d pts_i_, pts_j_;
+  Extrinsic ex0_, ex1_;
+  ProjectionWeight weight_;
+};
+
+/// Normalized-plane reprojection of the anchor observation (xy_i, inverse depth)
+/// from pose_i/camera a into pose_j/camera b; the pure math shared by the factors
+/// and by outlier checks. Returns the 3D point in camera b.
+Eigen::Vector3d transferPoint(const Eigen::Vector3d& pts_i, double inv_depth,
+                              const Eigen::Vector3d& p_i, const Eigen::Quaterniond& q_i,
+                              const Eigen::Vector3d& p_j, const Eigen::Quaterniond& q_j,
+                              const Extrinsic& cam_a, const Extrinsic& cam_b);
+
+}  // namespace idyvins::backend
