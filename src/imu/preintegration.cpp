@@ -14,13 +14,8 @@ using Eigen::Vector3d;
 Preintegration::Preintegration(const Vector3d& acc0, const Vector3d& gyr0, const Vector3d& ba,
                                const Vector3d& bg, const ImuNoise& noise)
     : acc0_first_(acc0), gyr0_first_(gyr0), ba_(ba), bg_(bg), g_w_(0, 0, noise.g_norm) {
-  const Matrix3d I = Matrix3d::Identity();
-  noise_.block<3, 3>(0, 0) = noise.acc_n * noise.acc_n * I;
-  noise_.block<3, 3>(3, 3) = noise.gyr_n * noise.gyr_n * I;
-  noise_.block<3, 3>(6, 6) = noise.acc_n * noise.acc_n * I;
-  noise_.block<3, 3>(9, 9) = noise.gyr_n * noise.gyr_n * I;
-  noise_.block<3, 3>(12, 12) = noise.acc_w * noise.acc_w * I;
-  noise_.block<3, 3>(15, 15) = noise.gyr_w * noise.gyr_w * I;
+  const double q[6] = {noise.acc_n, noise.gyr_n, noise.acc_n, noise.gyr_n, noise.acc_w, noise.gyr_w};
+  for (int k = 0; k < 6; ++k) noise_diag_.segment<3>(3 * k).setConstant(q[k] * q[k]);
   reset();
 }
 
@@ -96,7 +91,7 @@ void Preintegration::step(double dt, const Vector3d& acc1, const Vector3d& gyr1)
   V.block<3, 3>(kBg, 15) = I * dt;
 
   jacobian_ = F * jacobian_;
-  covariance_ = F * covariance_ * F.transpose() + V * noise_ * V.transpose();
+  covariance_ = F * covariance_ * F.transpose() + V * noise_diag_.asDiagonal() * V.transpose();
 
   delta_p_ = p1;
   delta_v_ = v1;

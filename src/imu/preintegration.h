@@ -90,7 +90,7 @@ class Preintegration {
   Eigen::Vector3d acc0_first_, gyr0_first_;
   Eigen::Vector3d acc0_, gyr0_;
   Eigen::Vector3d ba_, bg_;
-  Eigen::Matrix<double, 18, 18> noise_ = Eigen::Matrix<double, 18, 18>::Zero();
+  Eigen::Matrix<double, 18, 1> noise_diag_;  ///< diagonal of Q
   Eigen::Vector3d g_w_;
   double sum_dt_ = 0;
   Eigen::Vector3d delta_p_, delta_v_;
