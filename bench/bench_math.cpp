@@ -83,19 +83,19 @@ struct ProjSetup {
   }
 };
 
-void BM_ProjectionTwoFrameOneCamEvaluate(benchmark::State& state) {
+void BM_ProjectionTwoFrameLeftEvaluate(benchmark::State& state) {
   ProjSetup s;
-  backend::ProjectionTwoFrameOneCam f(Vector2d(0.1, 0.05), Vector2d(0.11, 0.05), s.ex0, {});
+  backend::ProjectionTwoFrame f(Vector2d(0.1, 0.05), Vector2d(0.11, 0.05), s.ex0, s.ex0, {});
   evaluateLoop(state, f, {s.pi, s.pj, &s.inv_depth});
 }
-BENCHMARK(BM_ProjectionTwoFrameOneCamEvaluate);
+BENCHMARK(BM_ProjectionTwoFrameLeftEvaluate);
 
-void BM_ProjectionTwoFrameTwoCamEvaluate(benchmark::State& state) {
+void BM_ProjectionTwoFrameRightEvaluate(benchmark::State& state) {
   ProjSetup s;
-  backend::ProjectionTwoFrameTwoCam f(Vector2d(0.1, 0.05), Vector2d(0.1, 0.05), s.ex0, s.ex1, {});
+  backend::ProjectionTwoFrame f(Vector2d(0.1, 0.05), Vector2d(0.1, 0.05), s.ex0, s.ex1, {});
   evaluateLoop(state, f, {s.pi, s.pj, &s.inv_depth});
 }
-BENCHMARK(BM_ProjectionTwoFrameTwoCamEvaluate);
+BENCHMARK(BM_ProjectionTwoFrameRightEvaluate);
 
 void BM_ProjectionOneFrameTwoCamEvaluate(benchmark::State& state) {
   ProjSetup s;

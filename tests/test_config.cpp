@@ -11,20 +11,12 @@ namespace {
 
 using test::readFile;
 using test::sharedData;
+using test::expectError;
 using test::TempDir;
 using test::writeFile;
 
 std::string configPath(const std::string& rel) {
   return std::string(IDYVINS_SOURCE_DIR) + "/config/" + rel;
-}
-
-void expectError(const std::function<void()>& f, const std::string& needle) {
-  try {
-    f();
-    FAIL() << "expected InputError containing '" << needle << "'";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-  }
 }
 
 TEST(Config, ReadsViodePublishedCalibration) {

@@ -7,6 +7,7 @@
 namespace idyvins::io {
 namespace {
 
+using test::expectError;
 using test::TempDir;
 using test::writeFile;
 
@@ -33,15 +34,6 @@ TEST(Csv, WhitespaceSeparatedTables) {
   const auto rows = readTable(dir / "a.txt", {' ', 3, 3});
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].fields[2], "3");
-}
-
-void expectError(const std::function<void()>& f, const std::string& needle) {
-  try {
-    f();
-    FAIL() << "expected InputError containing '" << needle << "'";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-  }
 }
 
 TEST(Csv, BadInputGivesFileLineAndExpectation) {

@@ -14,19 +14,11 @@ namespace {
 
 namespace fs = std::filesystem;
 using test::sharedData;
+using test::expectError;
 using test::TempDir;
 using test::writeFile;
 
 const std::string kMicro = sharedData("euroc_v101_micro");
-
-void expectError(const std::function<void()>& f, const std::string& needle) {
-  try {
-    f();
-    FAIL() << "expected InputError containing '" << needle << "'";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-  }
-}
 
 TEST(EurocReader, RealMicroDatasetCounts) {
   const EurocDataset ds = readEurocDataset(kMicro);

@@ -110,8 +110,8 @@ TEST(ProjectionFactors, JacobiansMatchNumericAtRandomStates) {
   for (int t = 0; t < 50; ++t) {
     ProjectionSetup s = randomProjection();
     ProjectionWeight w{460.0, 1.5, t % 2 ? &scale : nullptr};
-    ProjectionTwoFrameOneCam one(s.xy_i, s.xy_j, s.ex0, w);
-    ProjectionTwoFrameTwoCam two(s.xy_i, s.xy_j_right, s.ex0, s.ex1, w);
+    ProjectionTwoFrame one(s.xy_i, s.xy_j, s.ex0, s.ex0, w);
+    ProjectionTwoFrame two(s.xy_i, s.xy_j_right, s.ex0, s.ex1, w);
     ProjectionOneFrameTwoCam stereo(s.xy_i, s.xy_i_right, s.ex0, s.ex1, w);
     test::checkCostFunction(one, {s.pose_i.data(), s.pose_j.data(), &s.inv_depth}, 1e-6, "2f1c");
     test::checkCostFunction(two, {s.pose_i.data(), s.pose_j.data(), &s.inv_depth}, 1e-6, "2f2c");
@@ -121,7 +121,7 @@ TEST(ProjectionFactors, JacobiansMatchNumericAtRandomStates) {
 
 TEST(ProjectionFactors, ResidualIsTheNormalizedReprojectionErrorInPixels) {
   ProjectionSetup s = randomProjection();
-  ProjectionTwoFrameOneCam f(s.xy_i, s.xy_j, s.ex0, {460.0, 1.5, nullptr});
+  ProjectionTwoFrame f(s.xy_i, s.xy_j, s.ex0, s.ex0, {460.0, 1.5, nullptr});
   const double* params[] = {s.pose_i.data(), s.pose_j.data(), &s.inv_depth};
   Vector2d r;
   ASSERT_TRUE(f.Evaluate(params, r.data(), nullptr));
@@ -136,7 +136,7 @@ TEST(ProjectionFactors, ResidualIsTheNormalizedReprojectionErrorInPixels) {
 TEST(ProjectionFactors, InformationScaleHookReweightsAtRunTime) {
   ProjectionSetup s = randomProjection();
   double scale = 1.0;
-  ProjectionTwoFrameOneCam f(s.xy_i, s.xy_j, s.ex0, {460.0, 1.5, &scale});
+  ProjectionTwoFrame f(s.xy_i, s.xy_j, s.ex0, s.ex0, {460.0, 1.5, &scale});
   const double* params[] = {s.pose_i.data(), s.pose_j.data(), &s.inv_depth};
   Vector2d r1, r2;
   ASSERT_TRUE(f.Evaluate(params, r1.data(), nullptr));

@@ -198,7 +198,7 @@ void buildWindow(Window& w) {
         const auto& tj = truth[j];
         const Vector3d pj = transferPoint(pts_i, 1.0 / p_c.z(), ta.p_w_b, ta.q_w_b, tj.p_w_b, tj.q_w_b, w.ex0, w.ex0);
         const Vector2d obs = pj.head<2>() / pj.z() + 0.005 * Vector2d(g(rng), g(rng));
-        lm.factors.push_back(std::make_shared<ProjectionTwoFrameOneCam>(pts_i.head<2>(), obs, w.ex0,
+        lm.factors.push_back(std::make_shared<ProjectionTwoFrame>(pts_i.head<2>(), obs, w.ex0, w.ex0,
                                                                          ProjectionWeight{460.0, 1.5, nullptr}));
         lm.frames.push_back(j);
       }

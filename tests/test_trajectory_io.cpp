@@ -9,6 +9,7 @@
 namespace idyvins::io {
 namespace {
 
+using test::expectError;
 using test::TempDir;
 using test::writeFile;
 
@@ -67,15 +68,6 @@ TEST(TrajectoryIo, ReadsSeventeenColumnGroundTruth) {
   const auto p = readEurocCsv(test::sharedData("euroc_imu_gt_excerpt/mav0/gt0/data.csv"));
   ASSERT_EQ(p.size(), 3340u);
   EXPECT_NEAR(p[0].q_w_b.x(), 0.790012, 1e-5);
-}
-
-void expectError(const std::function<void()>& f, const std::string& needle) {
-  try {
-    f();
-    FAIL() << "expected InputError containing '" << needle << "'";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-  }
 }
 
 TEST(TrajectoryIo, BadInput) {

@@ -22,24 +22,45 @@ Eigen::Matrix<double, 2, 3> reduceJacobian(const Vector3d& p, double sqrt_info) 
   return sqrt_info * r;
 }
 
-/// The two-frame case shared by the one-camera and two-camera factors.
-bool evaluateTwoFrame(double const* const* parameters, double* residuals, double** jacobians,
-                      const Vector3d& pts_i, const Vector3d& pts_j, const Extrinsic& a,
-                      const Extrinsic& b, const ProjectionWeight& weight) {
+Vector3d homogeneous(const Vector2d& xy) { return Vector3d(xy.x(), xy.y(), 1.0); }
+
+}  // namespace
+
+double ProjectionWeight::sqrtInfo() const {
+  const double base = focal_px / sigma_px;
+  return info_scale ? base * std::sqrt(*info_scale) : base;
+}
+
+Vector3d transferPoint(const Vector3d& pts_i, double inv_depth, const Vector3d& p_i,
+                       const Quaterniond& q_i, const Vector3d& p_j, const Quaterniond& q_j,
+                       const Extrinsic& cam_a, const Extrinsic& cam_b) {
+  const Vector3d pts_w = q_i * (cam_a.q_b_c * (pts_i / inv_depth) + cam_a.t_b_c) + p_i;
+  return cam_b.q_b_c.conjugate() * (q_j.conjugate() * (pts_w - p_j) - cam_b.t_b_c);
+}
+
+ProjectionTwoFrame::ProjectionTwoFrame(const Vector2d& xy_i, const Vector2d& xy_j,
+                                       const Extrinsic& T_b_c0, const Extrinsic& T_b_cb,
+                                       const ProjectionWeight& weight)
+    : pts_i_(homogeneous(xy_i)), pts_j_(homogeneous(xy_j)), ex0_(T_b_c0), exb_(T_b_cb),
+      weight_(weight) {}
+
+bool ProjectionTwoFrame::Evaluate(double const* const* parameters, double* residuals,
+                                  double** jacobians) const {
   const Eigen::Map<const Vector3d> Pi(parameters[0]);
   const Quaterniond Qi = Eigen::Map<const Quaterniond>(parameters[0] + 3).normalized();
   const Eigen::Map<const Vector3d> Pj(parameters[1]);
   const Quaterniond Qj = Eigen::Map<const Quaterniond>(parameters[1] + 3).normalized();
   const double inv_dep = parameters[2][0];
-
-  const Vector3d pts_cam_i = pts_i / inv_dep;
+  const Extrinsic& a = ex0_;
+  const Extrinsic& b = exb_;
+  const Vector3d pts_cam_i = pts_i_ / inv_dep;
   const Vector3d pts_imu_i = a.q_b_c * pts_cam_i + a.t_b_c;
   const Vector3d pts_w = Qi * pts_imu_i + Pi;
   const Vector3d pts_imu_j = Qj.conjugate() * (pts_w - Pj);
   const Vector3d pts_cam_j = b.q_b_c.conjugate() * (pts_imu_j - b.t_b_c);
-  const double sqrt_info = weight.sqrtInfo();
+  const double sqrt_info = weight_.sqrtInfo();
   Eigen::Map<Vector2d> r(residuals);
-  r = sqrt_info * (pts_cam_j.head<2>() / pts_cam_j.z() - pts_j.head<2>());
+  r = sqrt_info * (pts_cam_j.head<2>() / pts_cam_j.z() - pts_j_.head<2>());
   if (!jacobians) return true;
 
   const Matrix3d Ri = Qi.toRotationMatrix(), Rj = Qj.toRotationMatrix();
@@ -64,47 +85,11 @@ bool evaluateTwoFrame(double const* const* parameters, double* residuals, double
   }
   if (jacobians[2]) {
     Eigen::Map<Vector2d> J(jacobians[2]);
-    J = reduce * Rb_cb_T * Rj.transpose() * Ri * Rca_b * pts_i * (-1.0 / (inv_dep * inv_dep));
+    J = reduce * Rb_cb_T * Rj.transpose() * Ri * Rca_b * pts_i_ * (-1.0 / (inv_dep * inv_dep));
   }
   return true;
 }
 
-Vector3d homogeneous(const Vector2d& xy) { return Vector3d(xy.x(), xy.y(), 1.0); }
-
-}  // namespace
-
-double ProjectionWeight::sqrtInfo() const {
-  const double base = focal_px / sigma_px;
-  return info_scale ? base * std::sqrt(*info_scale) : base;
-}
-
-Vector3d transferPoint(const Vector3d& pts_i, double inv_depth, const Vector3d& p_i,
-                       const Quaterniond& q_i, const Vector3d& p_j, const Quaterniond& q_j,
-                       const Extrinsic& cam_a, const Extrinsic& cam_b) {
-  const Vector3d pts_w = q_i * (cam_a.q_b_c * (pts_i / inv_depth) + cam_a.t_b_c) + p_i;
-  return cam_b.q_b_c.conjugate() * (q_j.conjugate() * (pts_w - p_j) - cam_b.t_b_c);
-}
-
-ProjectionTwoFrameOneCam::ProjectionTwoFrameOneCam(const Vector2d& xy_i, const Vector2d& xy_j,
-                                                   const Extrinsic& T_b_c,
-                                                   const ProjectionWeight& weight)
-    : pts_i_(homogeneous(xy_i)), pts_j_(homogeneous(xy_j)), ex_(T_b_c), weight_(weight) {}
-
-bool ProjectionTwoFrameOneCam::Evaluate(double const* const* parameters, double* residuals,
-                                        double** jacobians) const {
-  return evaluateTwoFrame(parameters, residuals, jacobians, pts_i_, pts_j_, ex_, ex_, weight_);
-}
-
-ProjectionTwoFrameTwoCam::ProjectionTwoFrameTwoCam(const Vector2d& xy_i, const Vector2d& xy_j_right,
-                                                   const Extrinsic& T_b_c0, const Extrinsic& T_b_c1,
-                                                   const ProjectionWeight& weight)
-    : pts_i_(homogeneous(xy_i)), pts_j_(homogeneous(xy_j_right)), ex0_(T_b_c0), ex1_(T_b_c1),
-      weight_(weight) {}
-
-bool ProjectionTwoFrameTwoCam::Evaluate(double const* const* parameters, double* residuals,
-                                        double** jacobians) const {
-  return evaluateTwoFrame(parameters, residuals, jacobians, pts_i_, pts_j_, ex0_, ex1_, weight_);
-}
 
 ProjectionOneFrameTwoCam::ProjectionOneFrameTwoCam(const Vector2d& xy_left, const Vector2d& xy_right,
                                                    const Extrinsic& T_b_c0, const Extrinsic& T_b_c1,

@@ -26,34 +26,20 @@ struct ProjectionWeight {
   double sqrtInfo() const;
 };
 
-/// Left camera in frame i to left camera in frame j.
-/// Blocks: pose_i (7), pose_j (7), inv_depth (1).
-class ProjectionTwoFrameOneCam final : public ceres::SizedCostFunction<2, 7, 7, 1> {
+/// Anchor (left) camera in frame i to camera b in frame j (i != j): the left
+/// camera (T_b_cb = T_b_c0, VINS' "two frames one camera") or the right camera
+/// (T_b_cb = T_b_c1, "two frames two cameras"). Blocks: pose_i (7), pose_j (7), inv_depth (1).
+class ProjectionTwoFrame final : public ceres::SizedCostFunction<2, 7, 7, 1> {
  public:
-  ProjectionTwoFrameOneCam(const Eigen::Vector2d& xy_i, const Eigen::Vector2d& xy_j,
-                           const Extrinsic& T_b_c, const ProjectionWeight& weight);
+  ProjectionTwoFrame(const Eigen::Vector2d& xy_i, const Eigen::Vector2d& xy_j,
+                     const Extrinsic& T_b_c0, const Extrinsic& T_b_cb,
+                     const ProjectionWeight& weight);
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override;
 
  private:
   Eigen::Vector3d pts_i_, pts_j_;
-  Extrinsic ex_;
-  ProjectionWeight weight_;
-};
-
-/// Left camera in frame i to right camera in frame j (i != j).
-/// Blocks: pose_i (7), pose_j (7), inv_depth (1).
-class ProjectionTwoFrameTwoCam final : public ceres::SizedCostFunction<2, 7, 7, 1> {
- public:
-  ProjectionTwoFrameTwoCam(const Eigen::Vector2d& xy_i, const Eigen::Vector2d& xy_j_right,
-                           const Extrinsic& T_b_c0, const Extrinsic& T_b_c1,
-                           const ProjectionWeight& weight);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
-
- private:
-  Eigen::Vector3d pts_i_, pts_j_;
-  Extrinsic ex0_, ex1_;
+  Extrinsic ex0_, exb_;
   ProjectionWeight weight_;
 };
 
