@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <string>
@@ -36,7 +37,7 @@ TEST(Cli, HelpForEverySubcommand) {
   const Result top = run("--help");
   EXPECT_EQ(top.code, 0);
   EXPECT_NE(top.out.find("info"), std::string::npos);
-  for (const char* sub : {"info"}) {
+  for (const char* sub : {"info", "simulate"}) {
     const Result r = run(std::string(sub) + " --help");
     EXPECT_EQ(r.code, 0) << sub;
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << r.out;
@@ -77,6 +78,27 @@ TEST(Cli, BadInputIsOneLineAndNonZeroExit) {
   const Result c = run("info " + kMicro + " --config /nonexistent/cfg.yaml");
   EXPECT_EQ(c.code, 1);
   EXPECT_EQ(c.out, "error: /nonexistent/cfg.yaml: cannot open file (missing or unreadable)\n");
+}
+
+TEST(Cli, SimulateBadArguments) {
+  const Result level = run("simulate --level extreme --out /tmp/x");
+  EXPECT_NE(level.code, 0);
+  EXPECT_NE(level.out.find("extreme"), std::string::npos) << level.out;
+  const Result out = run("simulate --duration 0.1 --out /proc/forbidden/sim");
+  EXPECT_EQ(out.code, 1);
+  EXPECT_EQ(out.out.find("error: /proc/forbidden/sim/mav0/cam0/data: cannot create folder"), 0u) << out.out;
+  EXPECT_EQ(std::count(out.out.begin(), out.out.end(), '\n'), 1) << out.out;
+}
+
+TEST(Cli, SimulateWritesADatasetThatInfoValidates) {
+  idyvins::test::TempDir dir;
+  const Result sim = run("simulate --scene parking_lot --level low --duration 0.5 --out " + (dir / "ds"));
+  ASSERT_EQ(sim.code, 0) << sim.out;
+  EXPECT_NE(sim.out.find("11 stereo frames, 101 IMU samples"), std::string::npos) << sim.out;
+  const Result info = run("info " + (dir / "ds") + " --config " + (dir / "ds/config/sim_stereo_imu_config.yaml"));
+  ASSERT_EQ(info.code, 0) << info.out;
+  EXPECT_NE(info.out.find("groundtruth     101 states"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("valid: yes"), std::string::npos) << info.out;
 }
 
 TEST(Cli, ImageSizeDifferentFromConfig) {

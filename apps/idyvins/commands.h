@@ -12,4 +12,7 @@ enum ExitCode : int { kOk = 0, kInputError = 1, kUsageError = 2, kInternalError 
 /// `idyvins info DATASET [--config CFG] [--json]`.
 void registerInfo(CLI::App& app, int& exit_code);
 
+/// `idyvins simulate --scene S --level L --seed N --duration T --out DIR`.
+void registerSimulate(CLI::App& app, int& exit_code);
+
 }  // namespace idyvins::app

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "idyvins 0.1.0");
   int exit_code = kOk;
   registerInfo(app, exit_code);
+  registerSimulate(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

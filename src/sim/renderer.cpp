@@ -1,0 +1,132 @@
+#include "sim/renderer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/core.hpp>
+#include <stdexcept>
+
+namespace idyvins::sim {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+namespace {
+constexpr double kNear = 0.05;  // m
+
+/// Clips a polygon (camera frame) against z >= near.
+std::vector<Vector3d> clipNear(const std::vector<Vector3d>& poly) {
+  std::vector<Vector3d> out;
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Vector3d& a = poly[i];
+    const Vector3d& b = poly[(i + 1) % poly.size()];
+    const bool ina = a.z() >= kNear, inb = b.z() >= kNear;
+    if (ina) out.push_back(a);
+    if (ina != inb) out.push_back(a + (b - a) * ((kNear - a.z()) / (b.z() - a.z())));
+  }
+  return out;
+}
+}  // namespace
+
+Renderer::Renderer(const camera::CameraParams& params, const TextureBank& textures)
+    : params_(params), model_(camera::makeCamera(params)), textures_(textures) {
+  rays_.resize(static_cast<std::size_t>(params.width) * params.height);
+  for (int v = 0; v < params.height; ++v)
+    for (int u = 0; u < params.width; ++u) {
+      Vector2d xy;
+      if (!model_->liftToNormalized(Vector2d(u, v), xy))
+        throw std::runtime_error("renderer: camera model cannot lift every pixel");
+      rays_[static_cast<std::size_t>(v) * params.width + u] = xy.cast<float>();
+      const Vector2d pin(params.fx * xy.x() + params.cx, params.fy * xy.y() + params.cy);
+      max_distortion_px_ = std::max(max_distortion_px_, (pin - Vector2d(u, v)).norm());
+    }
+}
+
+RenderOutput Renderer::render(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c, bool sky,
+                              double noise_sigma, std::uint64_t noise_seed) const {
+  const int W = params_.width, H = params_.height;
+  const std::size_t N = static_cast<std::size_t>(W) * H;
+  std::vector<float> zbuf(N, std::numeric_limits<float>::infinity());
+  std::vector<int> hit(N, -1);
+  std::vector<float> hs(N), ht(N), hfoot(N);
+  const Eigen::Isometry3d T_c_w = T_w_c.inverse();
+  const double f = 0.5 * (params_.fx + params_.fy);
+  const double margin = max_distortion_px_ + 2.0;
+
+  for (int qi = 0; qi < static_cast<int>(quads.size()); ++qi) {
+    const Quad& q = quads[qi];
+    const Vector3d o = T_c_w * q.origin;
+    const Vector3d u = T_c_w.linear() * q.u, v = T_c_w.linear() * q.v;
+    const Vector3d n = u.cross(v);
+    const double n_dot_o = n.dot(o);
+    if (!q.two_sided && n_dot_o >= 0) continue;  // back face (camera behind the plane)
+    const std::vector<Vector3d> poly =
+        clipNear({o, o + u * q.width, o + u * q.width + v * q.height, o + v * q.height});
+    if (poly.size() < 3) continue;
+    double xmin = 1e30, xmax = -1e30, ymin = 1e30, ymax = -1e30;
+    for (const auto& p : poly) {
+      xmin = std::min(xmin, p.x() / p.z());
+      xmax = std::max(xmax, p.x() / p.z());
+      ymin = std::min(ymin, p.y() / p.z());
+      ymax = std::max(ymax, p.y() / p.z());
+    }
+    const int u0 = std::max(0, static_cast<int>(std::floor(params_.fx * xmin + params_.cx - margin)));
+    const int u1 = std::min(W - 1, static_cast<int>(std::ceil(params_.fx * xmax + params_.cx + margin)));
+    const int v0 = std::max(0, static_cast<int>(std::floor(params_.fy * ymin + params_.cy - margin)));
+    const int v1 = std::min(H - 1, static_cast<int>(std::ceil(params_.fy * ymax + params_.cy + margin)));
+    if (u0 > u1 || v0 > v1) continue;
+    for (int py = v0; py <= v1; ++py) {
+      for (int px = u0; px <= u1; ++px) {
+        const std::size_t idx = static_cast<std::size_t>(py) * W + px;
+        const Eigen::Vector2f& r = rays_[idx];
+        const Vector3d d(r.x(), r.y(), 1.0);
+        const double n_dot_d = n.dot(d);
+        if (std::abs(n_dot_d) < 1e-12) continue;
+        const double z = n_dot_o / n_dot_d;  // d.z = 1, so the ray parameter is the depth
+        if (z < kNear || z >= zbuf[idx]) continue;
+        const Vector3d rel = d * z - o;
+        const double s = rel.dot(u), t = rel.dot(v);
+        if (s < 0 || s > q.width || t < 0 || t > q.height) continue;
+        zbuf[idx] = static_cast<float>(z);
+        hit[idx] = qi;
+        hs[idx] = static_cast<float>(s);
+        ht[idx] = static_cast<float>(t);
+        // Footprint of a pixel on the surface: z |d|² / (f |n·d|).
+        hfoot[idx] = static_cast<float>(z * d.squaredNorm() / (f * std::abs(n_dot_d)));
+      }
+    }
+  }
+
+  RenderOutput out;
+  out.image = cv::Mat(H, W, CV_8UC1);
+  out.mask = cv::Mat::zeros(H, W, CV_8UC1);
+  out.depth = cv::Mat::zeros(H, W, CV_32F);
+  cv::Mat noise(H, W, CV_32F, cv::Scalar(0));
+  if (noise_sigma > 0) {
+    cv::RNG rng(noise_seed);
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, noise_sigma);
+  }
+  for (int py = 0; py < H; ++py) {
+    std::uint8_t* img = out.image.ptr<std::uint8_t>(py);
+    std::uint8_t* msk = out.mask.ptr<std::uint8_t>(py);
+    float* dep = out.depth.ptr<float>(py);
+    const float* nz = noise.ptr<float>(py);
+    for (int px = 0; px < W; ++px) {
+      const std::size_t idx = static_cast<std::size_t>(py) * W + px;
+      float value;
+      if (hit[idx] < 0) {
+        value = sky ? 215.0f - 25.0f * static_cast<float>(py) / H : 20.0f;
+      } else {
+        const Quad& q = quads[hit[idx]];
+        value = q.albedo * textures_.sample(q.texture, hs[idx] + q.tex_offset_s, ht[idx] + q.tex_offset_t,
+                                            hfoot[idx]);
+        msk[px] = q.object_id;
+        dep[px] = zbuf[idx];
+      }
+      img[px] = cv::saturate_cast<std::uint8_t>(value + nz[px]);
+    }
+  }
+  return out;
+}
+
+}  // namespace idyvins::sim

@@ -1,0 +1,331 @@
+#include "sim/simulator.h"
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+#include <thread>
+
+#include "core/error.h"
+#include "sim/renderer.h"
+#include "sim/textures.h"
+
+namespace fs = std::filesystem;
+
+namespace idyvins::sim {
+
+using Eigen::Vector3d;
+
+Config rigConfig(const SimOptions& options) {
+  Config c;
+  c.path = "sim_stereo_imu_config.yaml";
+  c.num_cam = 2;
+  c.image_width = 752;
+  c.image_height = 480;
+  for (int i = 0; i < 2; ++i) {
+    camera::CameraParams p;
+    p.type = camera::ModelType::kPinhole;
+    p.name = "cam" + std::to_string(i);
+    p.width = 752;
+    p.height = 480;
+    p.fx = p.fy = 380.0;
+    p.cx = 376.0;
+    p.cy = 240.0;
+    p.dist = {-0.05, 0.01, 0.0005, -0.0003};
+    c.cams.push_back(p);
+    c.cam_paths.push_back("cam" + std::to_string(i) + "_pinhole.yaml");
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;  // camera z = body x (forward), camera x = body -y
+    T.translation() = Vector3d(0.05, i == 0 ? 0.055 : -0.055, 0.0);
+    c.T_b_c.push_back(T);
+  }
+  // VINS-Fusion semantics (docs/conventions.md): acc_n = √2 σ_sample, σ_sample = density √rate;
+  // acc_w such that acc_w² δt² = random_walk² δt.
+  const double rate = options.imu_rate_hz;
+  const ImuErrorModel& m = options.imu;
+  c.imu.acc_n = std::sqrt(2.0) * m.acc_density * std::sqrt(rate);
+  c.imu.gyr_n = std::sqrt(2.0) * m.gyro_density * std::sqrt(rate);
+  c.imu.acc_w = m.acc_random_walk * std::sqrt(rate);
+  c.imu.gyr_w = m.gyro_random_walk * std::sqrt(rate);
+  c.imu.g_norm = options.g_norm;
+  c.tracker = TrackerOptions{150, 30, 1.0, true};
+  c.solver = SolverOptions{0.04, 8, 10.0};
+  return c;
+}
+
+void synthesizeImu(const Trajectory& traj, const SimOptions& o, std::vector<ImuSample>& imu,
+                   std::vector<GroundTruthState>& truth) {
+  std::mt19937_64 rng(o.scene.seed * 6364136223846793005ull + 1442695040888963407ull);
+  std::normal_distribution<double> g(0.0, 1.0);
+  auto gauss3 = [&](double s) -> Vector3d { return s * Vector3d(g(rng), g(rng), g(rng)); };
+  const ImuErrorModel& m = o.imu;
+  const double dt = 1.0 / o.imu_rate_hz;
+  Vector3d bg = gauss3(m.gyro_bias0_sigma * m.scale), ba = gauss3(m.acc_bias0_sigma * m.scale);
+  const std::size_t n = static_cast<std::size_t>(std::llround(o.duration_s * o.imu_rate_hz)) + 1;
+  const TimeNs dt_ns = static_cast<TimeNs>(std::llround(1e9 / o.imu_rate_hz));
+  imu.resize(n);
+  truth.resize(n);
+  const Vector3d g_w(0, 0, -o.g_norm);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    if (k > 0) {
+      bg += gauss3(m.gyro_random_walk * std::sqrt(dt) * m.scale);
+      ba += gauss3(m.acc_random_walk * std::sqrt(dt) * m.scale);
+    }
+    const BodyState s = traj.at(t);
+    ImuSample& sample = imu[k];
+    sample.t_ns = o.t0_ns + static_cast<TimeNs>(k) * dt_ns;
+    sample.gyr_b = s.omega_b + bg + gauss3(m.gyro_density / std::sqrt(dt) * m.scale);
+    sample.acc_b = s.q_w_b.conjugate() * (s.a_w - g_w) + ba + gauss3(m.acc_density / std::sqrt(dt) * m.scale);
+    GroundTruthState& gt = truth[k];
+    gt.t_ns = sample.t_ns;
+    gt.p_w_b = s.p_w_b;
+    gt.q_w_b = s.q_w_b;
+    gt.v_w = s.v_w;
+    gt.bg = bg;
+    gt.ba = ba;
+  }
+}
+
+namespace {
+
+void writeText(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw InputError(path.string(), "cannot write file");
+}
+
+std::string matrixYaml(const Eigen::Matrix4d& m, const char* indent) {
+  char buf[512];
+  std::string s = std::string(indent) + "rows: 4\n" + indent + "cols: 4\n" + indent + "dt: d\n" + indent + "data: [";
+  for (int i = 0; i < 16; ++i) {
+    std::snprintf(buf, sizeof(buf), "%s%.10g", i ? (i % 4 ? ", " : ",\n" + std::string(indent) + "       ").c_str() : "",
+                  m(i / 4, i % 4));
+    s += buf;
+  }
+  return s + "]\n";
+}
+
+void writeSensorYamls(const fs::path& mav0, const Config& c, const SimOptions& o) {
+  for (int i = 0; i < 2; ++i) {
+    const auto& p = c.cams[i];
+    char buf[2048];
+    std::snprintf(buf, sizeof(buf),
+                  "%%YAML:1.0\nsensor_type: camera\ncomment: idyvins simulator cam%d\nT_BS:\n%s"
+                  "rate_hz: %g\nresolution: [%d, %d]\ncamera_model: pinhole\nintrinsics: [%g, %g, %g, %g]\n"
+                  "distortion_model: radial-tangential\ndistortion_coefficients: [%g, %g, %g, %g]\n",
+                  i, matrixYaml(c.T_b_c[i].matrix(), "  ").c_str(), o.camera_rate_hz, p.width, p.height, p.fx,
+                  p.fy, p.cx, p.cy, p.dist[0], p.dist[1], p.dist[2], p.dist[3]);
+    writeText(mav0 / ("cam" + std::to_string(i)) / "sensor.yaml", buf);
+  }
+  char buf[1024];
+  const auto& m = o.imu;
+  std::snprintf(buf, sizeof(buf),
+                "%%YAML:1.0\nsensor_type: imu\ncomment: idyvins simulator IMU (noise scale %g)\nT_BS:\n%s"
+                "rate_hz: %g\ngyroscope_noise_density: %g\ngyroscope_random_walk: %g\n"
+                "accelerometer_noise_density: %g\naccelerometer_random_walk: %g\n",
+                m.scale, matrixYaml(Eigen::Matrix4d::Identity(), "  ").c_str(), o.imu_rate_hz, m.gyro_density * m.scale,
+                m.gyro_random_walk * m.scale, m.acc_density * m.scale, m.acc_random_walk * m.scale);
+  writeText(mav0 / "imu0" / "sensor.yaml", buf);
+  writeText(mav0 / "state_groundtruth_estimate0" / "sensor.yaml",
+            "%YAML:1.0\nsensor_type: visual-inertial\ncomment: idyvins simulator ground truth (body = IMU)\n");
+  writeText(mav0 / "body.yaml", "%YAML:1.0\ncomment: idyvins simulator drone\n");
+}
+
+void writeImuAndTruth(const fs::path& mav0, const std::vector<ImuSample>& imu,
+                      const std::vector<GroundTruthState>& truth) {
+  std::string s = "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+                  "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n";
+  char buf[512];
+  for (const auto& m : imu) {
+    std::snprintf(buf, sizeof(buf), "%lld,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n", static_cast<long long>(m.t_ns),
+                  m.gyr_b.x(), m.gyr_b.y(), m.gyr_b.z(), m.acc_b.x(), m.acc_b.y(), m.acc_b.z());
+    s += buf;
+  }
+  writeText(mav0 / "imu0" / "data.csv", s);
+  s = "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], "
+      "v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], "
+      "b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], b_a_RS_S_z [m s^-2]\n";
+  for (const auto& g : truth) {
+    std::snprintf(buf, sizeof(buf),
+                  "%lld,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n",
+                  static_cast<long long>(g.t_ns), g.p_w_b.x(), g.p_w_b.y(), g.p_w_b.z(), g.q_w_b.w(), g.q_w_b.x(),
+                  g.q_w_b.y(), g.q_w_b.z(), g.v_w.x(), g.v_w.y(), g.v_w.z(), g.bg.x(), g.bg.y(), g.bg.z(), g.ba.x(),
+                  g.ba.y(), g.ba.z());
+    s += buf;
+  }
+  writeText(mav0 / "state_groundtruth_estimate0" / "data.csv", s);
+}
+
+nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult& r, const Config& rig) {
+  nlohmann::json objects = nlohmann::json::array();
+  for (const auto& v : world.vehicles)
+    objects.push_back({{"id", v.id},
+                       {"type", v.type},
+                       {"size_m", {v.size.x(), v.size.y(), v.size.z()}},
+                       {"speed_mps", v.speed},
+                       {"lane_start", {v.lane_start.x(), v.lane_start.y(), v.lane_start.z()}},
+                       {"lane_dir", {v.lane_dir.x(), v.lane_dir.y(), v.lane_dir.z()}},
+                       {"lane_length_m", v.lane_length},
+                       {"offset_m", v.offset}});
+  nlohmann::json markers = nlohmann::json::array();
+  for (const auto& m : world.markers)
+    for (const auto& c : m.corners_w) markers.push_back({c.x(), c.y(), c.z()});
+  return {{"generator", "idyvins simulate"},
+          {"scene", o.scene.scene},
+          {"level", toString(o.scene.level)},
+          {"seed", o.scene.seed},
+          {"opening_vehicle", o.scene.opening_vehicle},
+          {"duration_s", o.duration_s},
+          {"t0_ns", o.t0_ns},
+          {"frames", r.frames},
+          {"imu_samples", r.imu_samples},
+          {"camera_rate_hz", o.camera_rate_hz},
+          {"imu_rate_hz", o.imu_rate_hz},
+          {"path_length_m", r.path_length_m},
+          {"moving_objects", objects},
+          {"moving_coverage_cam0",
+           {{"mean", r.coverage.mean}, {"max", r.coverage.max}, {"frames_over_30pct", r.coverage.frames_over_30pct}}},
+          {"imu_noise_scale", o.imu.scale},
+          {"image_noise_sigma", o.image_noise_sigma},
+          {"stereo_baseline_m", (rig.T_b_c[0].inverse() * rig.T_b_c[1]).translation().norm()},
+          {"marker_corners_w", markers}};
+}
+
+}  // namespace
+
+void writeVinsConfig(const Config& c, const std::string& folder, const std::string& name) {
+  const fs::path dir(folder);
+  fs::create_directories(dir);
+  for (int i = 0; i < c.num_cam; ++i) {
+    const auto& p = c.cams[i];
+    char buf[1024];
+    std::snprintf(buf, sizeof(buf),
+                  "%%YAML:1.0\n---\nmodel_type: PINHOLE\ncamera_name: cam%d\nimage_width: %d\nimage_height: %d\n"
+                  "distortion_parameters:\n   k1: %.10g\n   k2: %.10g\n   p1: %.10g\n   p2: %.10g\n"
+                  "projection_parameters:\n   fx: %.10g\n   fy: %.10g\n   cx: %.10g\n   cy: %.10g\n",
+                  i, p.width, p.height, p.dist[0], p.dist[1], p.dist[2], p.dist[3], p.fx, p.fy, p.cx, p.cy);
+    writeText(dir / c.cam_paths[i], buf);
+  }
+  std::string s = "%YAML:1.0\n# Written by idyvins simulate: the simulated stereo rig and IMU.\n";
+  s += "imu: 1\nnum_of_cam: " + std::to_string(c.num_cam) + "\n\n";
+  for (int i = 0; i < c.num_cam; ++i) s += "cam" + std::to_string(i) + "_calib: \"" + c.cam_paths[i] + "\"\n";
+  s += "image_width: " + std::to_string(c.image_width) + "\nimage_height: " + std::to_string(c.image_height) + "\n\n";
+  s += "estimate_extrinsic: 0\n";
+  for (int i = 0; i < c.num_cam; ++i)
+    s += "body_T_cam" + std::to_string(i) + ": !!opencv-matrix\n" + matrixYaml(c.T_b_c[i].matrix(), "   ");
+  char buf[1024];
+  std::snprintf(buf, sizeof(buf),
+                "\n# Feature tracker\nmax_cnt: %d\nmin_dist: %g\nF_threshold: %g\nflow_back: %d\n\n"
+                "# Sliding-window optimization\nmax_solver_time: %g\nmax_num_iterations: %d\nkeyframe_parallax: %g\n\n"
+                "# IMU noise (VINS-Fusion semantics, see docs/conventions.md)\nacc_n: %.6g\ngyr_n: %.6g\n"
+                "acc_w: %.6g\ngyr_w: %.6g\ng_norm: %.6g\n\nestimate_td: 0\ntd: 0.0\n\n"
+                "# IDY-VINS\nmode: %s\nlambda_dy: %g\nlambda_dy_c: %g\n",
+                c.tracker.max_cnt, c.tracker.min_dist, c.tracker.f_threshold, c.tracker.flow_back ? 1 : 0,
+                c.solver.max_solver_time_s, c.solver.max_num_iterations, c.solver.keyframe_parallax_px, c.imu.acc_n,
+                c.imu.gyr_n, c.imu.acc_w, c.imu.gyr_w, c.imu.g_norm, toString(c.dynamic.mode), c.dynamic.lambda_dy,
+                c.dynamic.lambda_dy_c);
+  s += buf;
+  writeText(dir / name, s);
+}
+
+SimResult simulate(const SimOptions& o, const std::string& out_dir,
+                   const std::function<void(std::size_t, std::size_t)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  const fs::path root(out_dir), mav0 = root / "mav0";
+  std::error_code ec;
+  for (const char* sub : {"cam0/data", "cam0/mask", "cam1/data", "cam1/mask", "imu0", "state_groundtruth_estimate0"}) {
+    fs::create_directories(mav0 / sub, ec);
+    if (ec) throw InputError((mav0 / sub).string(), "cannot create folder: " + ec.message());
+  }
+  const Config rig = rigConfig(o);
+  const TextureBank textures(o.scene.seed);
+  const World world = buildWorld(o.scene, textures);
+  const Trajectory traj(o.scene.scene, o.scene.seed, o.g_norm);
+
+  SimResult result;
+  std::vector<ImuSample> imu;
+  std::vector<GroundTruthState> truth;
+  synthesizeImu(traj, o, imu, truth);
+  result.imu_samples = imu.size();
+  result.path_length_m = traj.pathLength(o.duration_s);
+  writeImuAndTruth(mav0, imu, truth);
+  writeSensorYamls(mav0, rig, o);
+  writeVinsConfig(rig, (root / "config").string(), "sim_stereo_imu_config.yaml");
+
+  const std::size_t frames = static_cast<std::size_t>(std::floor(o.duration_s * o.camera_rate_hz + 1e-9)) + 1;
+  const TimeNs frame_dt = static_cast<TimeNs>(std::llround(1e9 / o.camera_rate_hz));
+  result.frames = frames;
+  std::vector<TimeNs> stamps(frames);
+  for (std::size_t k = 0; k < frames; ++k) stamps[k] = o.t0_ns + static_cast<TimeNs>(k) * frame_dt;
+  std::vector<double> coverage(frames, 0.0);
+  const Renderer renderers[2] = {Renderer(rig.cams[0], textures), Renderer(rig.cams[1], textures)};
+
+  std::atomic<std::size_t> next{0}, done{0};
+  std::atomic<bool> failed{false};
+  std::mutex error_mutex;
+  std::string error;
+  auto worker = [&]() {
+    try {
+      for (std::size_t k = next++; k < frames; k = next++) {
+        const double t = static_cast<double>(k) / o.camera_rate_hz;
+        const std::vector<Quad> quads = world.quadsAt(t);
+        const BodyState s = traj.at(t);
+        Eigen::Isometry3d T_w_b = Eigen::Isometry3d::Identity();
+        T_w_b.linear() = s.q_w_b.toRotationMatrix();
+        T_w_b.translation() = s.p_w_b;
+        const std::string name = std::to_string(stamps[k]) + ".png";
+        for (int c = 0; c < 2; ++c) {
+          const RenderOutput r = renderers[c].render(quads, T_w_b * rig.T_b_c[c], world.sky, o.image_noise_sigma,
+                                                     o.scene.seed * 1000003ull + k * 2 + c);
+          const fs::path cam = mav0 / ("cam" + std::to_string(c));
+          if (!cv::imwrite((cam / "data" / name).string(), r.image) ||
+              !cv::imwrite((cam / "mask" / name).string(), r.mask))
+            throw InputError((cam / "data" / name).string(), "cannot write image");
+          if (c == 0) coverage[k] = static_cast<double>(cv::countNonZero(r.mask)) / (r.mask.rows * r.mask.cols);
+        }
+        ++done;
+      }
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      if (error.empty()) error = e.what();
+      next = frames;
+      failed = true;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 0; i < std::max(1, o.threads); ++i) pool.emplace_back(worker);
+  while (done < frames && !failed) {
+    if (progress) progress(done, frames);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  for (auto& th : pool) th.join();
+  if (!error.empty()) throw std::runtime_error(error);
+  if (progress) progress(frames, frames);
+
+  std::string csv = "#timestamp [ns],filename\n";
+  for (TimeNs t : stamps) csv += std::to_string(t) + "," + std::to_string(t) + ".png\n";
+  writeText(mav0 / "cam0" / "data.csv", csv);
+  writeText(mav0 / "cam1" / "data.csv", csv);
+
+  double sum = 0;
+  std::size_t over = 0;
+  for (double c : coverage) {
+    sum += c;
+    result.coverage.max = std::max(result.coverage.max, c);
+    over += c >= 0.30 ? 1 : 0;
+  }
+  result.coverage.mean = sum / frames;
+  result.coverage.frames_over_30pct = static_cast<double>(over) / frames;
+  writeText(root / "meta.json", metaJson(o, world, result, rig).dump(2) + "\n");
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace idyvins::sim

@@ -1,0 +1,152 @@
+#include "sim/textures.h"
+
+#include <cmath>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace idyvins::sim {
+namespace {
+
+constexpr int kCheckerSquares = 8;
+
+/// Smooth random background: low-frequency value noise.
+cv::Mat background(cv::RNG& rng, int n, double mean, double amplitude, int cells) {
+  cv::Mat small(cells, cells, CV_32F);
+  rng.fill(small, cv::RNG::UNIFORM, mean - amplitude, mean + amplitude);
+  cv::Mat big;
+  cv::resize(small, big, cv::Size(n, n), 0, 0, cv::INTER_CUBIC);
+  return big;
+}
+
+void randomShapes(cv::Mat& img, cv::RNG& rng, int rects, int circles, int lines, int min_size,
+                  int max_size) {
+  const int n = img.cols;
+  for (int i = 0; i < rects; ++i) {
+    const int w = rng.uniform(min_size, max_size), h = rng.uniform(min_size, max_size);
+    const int x = rng.uniform(0, n), y = rng.uniform(0, n);
+    cv::rectangle(img, cv::Rect(x, y, w, h), cv::Scalar(rng.uniform(10, 245)), cv::FILLED);
+  }
+  for (int i = 0; i < circles; ++i) {
+    cv::circle(img, cv::Point(rng.uniform(0, n), rng.uniform(0, n)), rng.uniform(min_size / 2, max_size / 2),
+               cv::Scalar(rng.uniform(10, 245)), cv::FILLED, cv::LINE_AA);
+  }
+  for (int i = 0; i < lines; ++i) {
+    cv::line(img, cv::Point(rng.uniform(0, n), rng.uniform(0, n)), cv::Point(rng.uniform(0, n), rng.uniform(0, n)),
+             cv::Scalar(rng.uniform(10, 245)), rng.uniform(1, 4), cv::LINE_AA);
+  }
+}
+
+cv::Mat makeTexture(TextureKind kind, cv::RNG& rng, int n) {
+  cv::Mat f;
+  switch (kind) {
+    case TextureKind::kFacade: {
+      f = background(rng, n, 130, 50, 8);
+      randomShapes(f, rng, 500, 120, 60, n / 128, n / 16);
+      // Windows: a regular grid of dark panes with frames.
+      const int cols = rng.uniform(5, 9), rows = rng.uniform(4, 7);
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c) {
+          const int cw = n / cols, ch = n / rows;
+          const cv::Rect outer(c * cw + cw / 6, r * ch + ch / 5, cw * 2 / 3, ch * 3 / 5);
+          cv::rectangle(f, outer, cv::Scalar(rng.uniform(20, 70)), cv::FILLED);
+          cv::rectangle(f, outer, cv::Scalar(rng.uniform(180, 240)), std::max(2, n / 256));
+          cv::line(f, {outer.x + outer.width / 2, outer.y}, {outer.x + outer.width / 2, outer.y + outer.height},
+                   cv::Scalar(rng.uniform(160, 230)), std::max(2, n / 512));
+        }
+      break;
+    }
+    case TextureKind::kGround:
+      f = background(rng, n, 110, 35, 16);
+      randomShapes(f, rng, 700, 250, 40, n / 256, n / 24);
+      break;
+    case TextureKind::kVehicle:
+      f = background(rng, n, 120, 60, 6);
+      randomShapes(f, rng, 600, 200, 80, n / 128, n / 12);
+      break;
+    case TextureKind::kConcrete:
+      f = background(rng, n, 140, 40, 12);
+      randomShapes(f, rng, 600, 150, 100, n / 160, n / 14);
+      break;
+    case TextureKind::kChecker: {
+      f = cv::Mat(n, n, CV_32F);
+      const int sq = n / kCheckerSquares;
+      for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) f.at<float>(y, x) = ((x / sq + y / sq) % 2) ? 230.f : 25.f;
+      break;
+    }
+  }
+  if (kind != TextureKind::kChecker) cv::GaussianBlur(f, f, cv::Size(0, 0), 0.8);
+  cv::Mat out;
+  f.convertTo(out, CV_8U);
+  return out;
+}
+
+float bilinear(const cv::Mat& img, double x, double y) {
+  // Wrapping (tiled) bilinear lookup; texel centres at integer + 0.5.
+  const int n = img.cols;
+  x -= 0.5;
+  y -= 0.5;
+  const double fx = std::floor(x), fy = std::floor(y);
+  const float ax = static_cast<float>(x - fx), ay = static_cast<float>(y - fy);
+  const int x0 = ((static_cast<int>(fx) % n) + n) % n, y0 = ((static_cast<int>(fy) % n) + n) % n;
+  const int x1 = (x0 + 1) % n, y1 = (y0 + 1) % n;
+  const std::uint8_t* r0 = img.ptr<std::uint8_t>(y0);
+  const std::uint8_t* r1 = img.ptr<std::uint8_t>(y1);
+  const float top = r0[x0] + ax * (r0[x1] - r0[x0]);
+  const float bot = r1[x0] + ax * (r1[x1] - r1[x0]);
+  return top + ay * (bot - top);
+}
+
+}  // namespace
+
+TextureBank::TextureBank(std::uint64_t seed, int per_kind, int log2_size) {
+  cv::RNG rng(seed * 2654435761ull + 17);
+  const int n = 1 << log2_size;
+  const TextureKind kinds[] = {TextureKind::kFacade, TextureKind::kGround, TextureKind::kVehicle,
+                               TextureKind::kConcrete, TextureKind::kChecker};
+  const double texel[] = {0.015, 0.01, 0.006, 0.012, 0.6 / (n / kCheckerSquares)};
+  by_kind_.resize(5);
+  for (int k = 0; k < 5; ++k) {
+    const int count = kinds[k] == TextureKind::kChecker ? 1 : per_kind;
+    for (int i = 0; i < count; ++i) {
+      Texture t;
+      t.texel_m = texel[k];
+      t.levels.push_back(makeTexture(kinds[k], rng, n));
+      while (t.levels.back().cols > 1) {
+        cv::Mat half;
+        cv::resize(t.levels.back(), half, cv::Size(t.levels.back().cols / 2, t.levels.back().rows / 2), 0, 0,
+                   cv::INTER_AREA);
+        t.levels.push_back(half);
+      }
+      by_kind_[k].push_back(static_cast<int>(textures_.size()));
+      textures_.push_back(std::move(t));
+    }
+  }
+}
+
+int TextureBank::index(TextureKind kind, int i) const {
+  const auto& list = by_kind_[static_cast<int>(kind)];
+  return list[static_cast<std::size_t>(i) % list.size()];
+}
+
+double TextureBank::checkerSquare() const {
+  const Texture& t = textures_[index(TextureKind::kChecker, 0)];
+  return t.texel_m * (t.levels[0].cols / kCheckerSquares);
+}
+
+float TextureBank::sample(int texture, double s_m, double t_m, double footprint_m) const {
+  const Texture& tex = textures_[texture];
+  const double texels = std::max(footprint_m / tex.texel_m, 1e-6);
+  const double level = std::max(0.0, std::log2(texels));
+  const int max_level = static_cast<int>(tex.levels.size()) - 1;
+  const int l0 = std::min(static_cast<int>(level), max_level);
+  const int l1 = std::min(l0 + 1, max_level);
+  const double frac = std::min(1.0, level - l0);
+  const double u = s_m / tex.texel_m, v = t_m / tex.texel_m;
+  const float a = bilinear(tex.levels[l0], u / (1 << l0), v / (1 << l0));
+  if (frac < 1e-3 || l0 == l1) return a;
+  const float b = bilinear(tex.levels[l1], u / (1 << l1), v / (1 << l1));
+  return static_cast<float>(a + frac * (b - a));
+}
+
+}  // namespace idyvins::sim

@@ -1,0 +1,46 @@
+#pragma once
+// Smooth, drone-like body trajectories with analytic position derivatives.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <string>
+
+namespace idyvins::sim {
+
+/// Kinematic state of the body at one instant.
+struct BodyState {
+  Eigen::Vector3d p_w_b, v_w, a_w;   ///< position, velocity, acceleration in the world
+  Eigen::Quaterniond q_w_b;          ///< orientation
+  Eigen::Vector3d omega_b;           ///< angular rate in the body frame (rad/s)
+};
+
+/// A trajectory p(t) = c0 + c1 t + Σ A sin(ω t + φ) per axis, yaw following the
+/// velocity heading plus an oscillation, roll/pitch from the thrust direction
+/// (a_w + g ẑ), as a quadrotor flies.
+class Trajectory {
+ public:
+  /// Trajectory for a scene ("city" or "parking_lot"), phases from the seed.
+  Trajectory(const std::string& scene, std::uint64_t seed, double g_norm = 9.81);
+  BodyState at(double t) const;
+  Eigen::Quaterniond orientation(double t) const;
+  Eigen::Vector3d position(double t) const;
+  /// Path length over [0, duration] (numerical, 1 ms steps).
+  double pathLength(double duration) const;
+
+ private:
+  struct Wave {
+    double amp, omega, phase;
+  };
+  Eigen::Vector3d deriv(double t, int order) const;
+  double yaw(double t) const;
+  std::array<double, 3> c0_{}, c1_{};
+  std::array<std::array<Wave, 3>, 3> waves_{};
+  bool ellipse_ = false;  ///< parking lot: ellipse around the centre
+  double ell_a_ = 14, ell_b_ = 8, ell_w_ = 0.19, ell_phase_ = 0;
+  Wave yaw_wave_{0, 1, 0};
+  double g_norm_;
+};
+
+}  // namespace idyvins::sim

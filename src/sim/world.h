@@ -1,0 +1,82 @@
+#pragma once
+// The simulated world: textured rectangles (static scenery), vehicles (textured
+// boxes moving along lanes) and checkerboard markers with known corners.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sim/textures.h"
+
+namespace idyvins::sim {
+
+/// A textured rectangle: corner `origin`, unit edge directions `u`, `v` (normal u×v
+/// faces the viewer), extents in metres, and texture coordinate offsets.
+struct Quad {
+  Eigen::Vector3d origin, u, v;
+  double width = 1, height = 1;
+  int texture = 0;
+  double tex_offset_s = 0, tex_offset_t = 0;
+  float albedo = 1.0f;   ///< brightness factor
+  std::uint8_t object_id = 0;  ///< 0 = static world, k = moving object k
+  bool two_sided = false;
+};
+
+/// A box-shaped vehicle driving along a straight lane, wrapping around.
+struct Vehicle {
+  int id = 1;                  ///< object id in masks (1..255)
+  std::string type;            ///< car, van, truck
+  Eigen::Vector3d size;        ///< length, width, height (m)
+  Eigen::Vector3d lane_start;  ///< lane start (ground point)
+  Eigen::Vector3d lane_dir;    ///< unit direction of travel
+  double lane_length = 100;    ///< the vehicle wraps after this distance
+  double speed = 5;            ///< m/s
+  double offset = 0;           ///< position along the lane at t = 0 (m)
+  int texture = 0;
+  float albedo = 1.0f;
+  /// Pose at time t: centre of the box's bottom face and heading.
+  Eigen::Vector3d position(double t) const;
+  /// The 5 visible faces (4 sides + roof) at time t.
+  std::vector<Quad> faces(double t) const;
+};
+
+/// A planar checkerboard marker: its quad and its inner corners in the world.
+struct Marker {
+  Quad quad;
+  std::vector<Eigen::Vector3d> corners_w;
+};
+
+/// Everything that can be seen.
+struct World {
+  std::string scene;
+  std::vector<Quad> statics;
+  std::vector<Vehicle> vehicles;
+  std::vector<Marker> markers;
+  bool sky = false;  ///< outdoor: rays that hit nothing see the sky
+  /// All quads at time t (statics, markers, vehicle faces).
+  std::vector<Quad> quadsAt(double t) const;
+};
+
+/// Dynamic levels, like VIODE's.
+enum class Level { kNone, kLow, kMid, kHigh };
+bool parseLevel(const std::string& text, Level& level);
+const char* toString(Level level);
+
+/// Options for building a scene.
+struct SceneOptions {
+  std::string scene = "city";  ///< city | parking_lot
+  Level level = Level::kNone;
+  std::uint64_t seed = 1;
+  bool opening_vehicle = false;  ///< a vehicle passes close in front during the first seconds
+};
+
+/// Builds a scene. Throws std::invalid_argument for an unknown scene name.
+World buildWorld(const SceneOptions& options, const TextureBank& textures);
+
+/// Axis-aligned textured box (5 or 6 faces facing outwards, or inwards for rooms).
+void addBox(std::vector<Quad>& quads, const Eigen::Vector3d& min, const Eigen::Vector3d& max, int texture,
+            float albedo, bool inward, bool with_bottom, std::uint8_t object_id = 0);
+
+}  // namespace idyvins::sim
