@@ -165,7 +165,7 @@ void writeImuAndTruth(const fs::path& mav0, const std::vector<ImuSample>& imu,
 
 nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult& r, const Config& rig) {
   nlohmann::json objects = nlohmann::json::array();
-  for (const auto& v : world.vehicles)
+  for (const auto& v : world.vehicles) {
     objects.push_back({{"id", v.id},
                        {"type", v.type},
                        {"size_m", {v.size.x(), v.size.y(), v.size.z()}},
@@ -174,6 +174,8 @@ nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult
                        {"lane_dir", {v.lane_dir.x(), v.lane_dir.y(), v.lane_dir.z()}},
                        {"lane_length_m", v.lane_length},
                        {"offset_m", v.offset}});
+    if (v.ellipse) objects.back()["loop"] = {{"a_m", v.ellipse_a}, {"b_m", v.ellipse_b}, {"direction", v.direction}};
+  }
   nlohmann::json markers = nlohmann::json::array();
   for (const auto& m : world.markers)
     for (const auto& c : m.corners_w) markers.push_back({c.x(), c.y(), c.z()});

@@ -23,14 +23,14 @@ Trajectory::Trajectory(const std::string& scene, std::uint64_t seed, double g_no
     waves_[2] = {{{0.3, two_pi / 7.0, phase(rng)}, {0.08, two_pi / 2.9, phase(rng)}, {0, 1, 0}}};
     yaw_wave_ = {0.35, two_pi / 8.0, phase(rng)};
   } else if (scene == "parking_lot") {
-    // An ellipse around the garage centre at about 2 m/s, 2.3 m up.
+    // An ellipse around the garage centre at about 2 m/s, 1.5 m up (vehicle-roof height).
     ellipse_ = true;
     ell_phase_ = phase(rng);
-    c0_ = {0.0, 0.0, 2.3};
+    c0_ = {0.0, 0.0, 1.5};
     waves_[0] = {{{0.2, two_pi / 6.0, phase(rng)}, {0, 1, 0}, {0, 1, 0}}};
     waves_[1] = {{{0.2, two_pi / 5.0, phase(rng)}, {0, 1, 0}, {0, 1, 0}}};
     waves_[2] = {{{0.1, two_pi / 4.0, phase(rng)}, {0, 1, 0}, {0, 1, 0}}};
-    yaw_wave_ = {0.3, two_pi / 7.0, phase(rng)};
+    yaw_wave_ = {0.45, two_pi / 7.0, phase(rng)};
   } else {
     throw std::invalid_argument("unknown scene '" + scene + "' (expected city or parking_lot)");
   }

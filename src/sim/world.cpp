@@ -183,6 +183,9 @@ World buildCity(const SceneOptions& o, const TextureBank& tex) {
   return w;
 }
 
+// Traffic loops in the garage (the drone flies the ellipse a = 14, b = 8 between them).
+constexpr double kInnerA = 11.8, kInnerB = 5.8, kOuterA = 16.2, kOuterB = 10.2;
+
 World buildParkingLot(const SceneOptions& o, const TextureBank& tex) {
   World w;
   w.scene = "parking_lot";
@@ -200,9 +203,12 @@ World buildParkingLot(const SceneOptions& o, const TextureBank& tex) {
   for (double px : {-21.0, -14.0, -7.0, 0.0, 7.0, 14.0, 21.0})
     for (double py : {-13.0, -4.5, 4.5, 13.0}) {
       double dmin = 1e9;
-      for (double th = 0; th < 2 * M_PI; th += 0.01)
+      for (double th = 0; th < 2 * M_PI; th += 0.01) {
         dmin = std::min(dmin, std::hypot(px - 14 * std::cos(th), py - 8 * std::sin(th)));
-      if (dmin < 2.8) continue;
+        dmin = std::min(dmin, std::hypot(px - kInnerA * std::cos(th), py - kInnerB * std::sin(th)));
+        dmin = std::min(dmin, std::hypot(px - kOuterA * std::cos(th), py - kOuterB * std::sin(th)));
+      }
+      if (dmin < 2.0) continue;
       addBox(w.statics, Vector3d(px - 0.3, py - 0.3, 0), Vector3d(px + 0.3, py + 0.3, H),
              tex.index(TextureKind::kConcrete, k++), 0.9f, false, false);
     }
@@ -224,35 +230,36 @@ World buildParkingLot(const SceneOptions& o, const TextureBank& tex) {
     w.markers.push_back(makeMarker(Vector3d(-X + 0.02, y, 0.4), Vector3d(0, 1, 0), Vector3d::UnitZ(), tex));
   }
   if (o.level == Level::kNone && !o.opening_vehicle) return w;
-  // Lanes run through the walls ("gates") so vehicles enter and leave the garage.
-  std::vector<LaneSpec> lanes = {{{-45, 0.0, 0}, {1, 0, 0}, 90},   {{45, -11.0, 0}, {-1, 0, 0}, 90},
-                                 {{-45, 11.0, 0}, {1, 0, 0}, 90},  {{0.0, -35, 0}, {0, 1, 0}, 70},
-                                 {{-7.0, 35, 0}, {0, -1, 0}, 70}};
-  std::vector<int> lane_of;
-  std::vector<std::string> types;
-  std::vector<double> speeds, offsets;
+  // Traffic loops on an inner and an outer ellipse, 2.2 m from the drone's path.
   auto rnd = [&](double a, double b) { return a + (b - a) * U(rng); };
-  auto add = [&](int lane, const std::string& type, double speed, double offset) {
-    lane_of.push_back(lane);
-    types.push_back(type);
-    speeds.push_back(speed);
-    offsets.push_back(offset);
+  auto add = [&](bool inner, double direction, const std::string& type, double speed, double offset) {
+    Vehicle v;
+    v.id = static_cast<int>(w.vehicles.size()) + 1;
+    v.type = type;
+    v.size = type == "van" ? Vector3d(5.0, 2.0, 1.9) : Vector3d(4.5, 1.8, 1.5);
+    v.ellipse = true;
+    v.lane_start = Vector3d::Zero();
+    v.ellipse_a = inner ? kInnerA : kOuterA;
+    v.ellipse_b = inner ? kInnerB : kOuterB;
+    v.direction = direction;
+    v.speed = speed;
+    v.offset = offset;
+    v.texture = tex.index(TextureKind::kVehicle, v.id);
+    v.albedo = 0.8f + 0.05f * static_cast<float>(v.id % 5);
+    w.vehicles.push_back(v);
   };
   if (o.level == Level::kLow) {
-    add(1, "car", rnd(3, 5), rnd(0, 90));
-    add(2, "car", rnd(3, 5), rnd(0, 90));
+    add(false, -1, "car", rnd(3, 5), rnd(0, 90));
+    add(false, -1, "car", rnd(3, 5), rnd(0, 90));
   } else if (o.level == Level::kMid) {
-    for (int i = 0; i < 5; ++i) add(i, i % 2 ? "van" : "car", rnd(3, 7), rnd(0, 70));
+    for (int i = 0; i < 3; ++i) add(true, 1, i % 2 ? "van" : "car", rnd(3, 5), 15.0 * i + rnd(0, 5));
+    for (int i = 0; i < 2; ++i) add(false, -1, "car", rnd(4, 7), 40.0 * i + rnd(0, 10));
   } else if (o.level == Level::kHigh) {
-    for (int i = 0; i < 10; ++i) add(i % 5, i % 3 ? "car" : "van", rnd(3, 6), 9.0 * i + rnd(0, 6));
+    // Same direction as the drone on the inner loop, overtaking it one after the other.
+    for (int i = 0; i < 5; ++i) add(true, 1, i % 2 ? "van" : "car", rnd(3.0, 3.6), 9.0 * i + rnd(0, 3));
+    for (int i = 0; i < 5; ++i) add(false, i % 2 ? 1.0 : -1.0, i % 3 ? "car" : "van", rnd(3, 6), 18.0 * i + rnd(0, 6));
   }
-  if (o.opening_vehicle) {
-    lanes.push_back({{14.0 + 4.0 * std::cos(0.0), -12.0, 0}, {0, 1, 0}, 400});
-    add(static_cast<int>(lanes.size()) - 1, "van", 4.0, 3.0);
-  }
-  addVehicles(w, lanes, lane_of, types, speeds, offsets, tex);
-  for (auto& v : w.vehicles)
-    if (v.type == "van") v.size.z() = 1.9;  // garage clearance
+  if (o.opening_vehicle) add(true, 1, "van", 3.0, 0.0);
   return w;
 }
 
@@ -264,14 +271,30 @@ void addBox(std::vector<Quad>& quads, const Vector3d& min, const Vector3d& max, 
                  inward, with_bottom, object_id);
 }
 
+namespace {
+double loopAngle(const Vehicle& v, double t) {
+  return v.direction * (v.offset + v.speed * t) / (0.5 * (v.ellipse_a + v.ellipse_b));
+}
+}  // namespace
+
 Vector3d Vehicle::position(double t) const {
+  if (ellipse) {
+    const double th = loopAngle(*this, t);
+    return lane_start + Vector3d(ellipse_a * std::cos(th), ellipse_b * std::sin(th), 0.0);
+  }
   double s = std::fmod(offset + speed * t, lane_length);
   if (s < 0) s += lane_length;
   return lane_start + lane_dir * s;
 }
 
+Vector3d Vehicle::heading(double t) const {
+  if (!ellipse) return lane_dir;
+  const double th = loopAngle(*this, t);
+  return (direction * Vector3d(-ellipse_a * std::sin(th), ellipse_b * std::cos(th), 0.0)).normalized();
+}
+
 std::vector<Quad> Vehicle::faces(double t) const {
-  const Vector3d f = lane_dir;
+  const Vector3d f = heading(t);
   const Vector3d up = Vector3d::UnitZ();
   const Vector3d l = up.cross(f);
   const Vector3d c = position(t) - f * (0.5 * size.x()) - l * (0.5 * size.y());

@@ -24,7 +24,8 @@ struct Quad {
   bool two_sided = false;
 };
 
-/// A box-shaped vehicle driving along a straight lane, wrapping around.
+/// A box-shaped vehicle driving along a straight lane (wrapping around) or around
+/// an elliptic loop (centre lane_start, semi-axes ellipse_a/b along x/y).
 struct Vehicle {
   int id = 1;                  ///< object id in masks (1..255)
   std::string type;            ///< car, van, truck
@@ -36,8 +37,13 @@ struct Vehicle {
   double offset = 0;           ///< position along the lane at t = 0 (m)
   int texture = 0;
   float albedo = 1.0f;
-  /// Pose at time t: centre of the box's bottom face and heading.
+  bool ellipse = false;              ///< elliptic loop instead of a straight lane
+  double ellipse_a = 0, ellipse_b = 0;
+  double direction = 1.0;            ///< +1 counter-clockwise, -1 clockwise (loops)
+  /// Centre of the box's bottom face at time t.
   Eigen::Vector3d position(double t) const;
+  /// Unit direction of travel at time t.
+  Eigen::Vector3d heading(double t) const;
   /// The 5 visible faces (4 sides + roof) at time t.
   std::vector<Quad> faces(double t) const;
 };
