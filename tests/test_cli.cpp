@@ -37,7 +37,7 @@ TEST(Cli, HelpForEverySubcommand) {
   const Result top = run("--help");
   EXPECT_EQ(top.code, 0);
   EXPECT_NE(top.out.find("info"), std::string::npos);
-  for (const char* sub : {"info", "simulate"}) {
+  for (const char* sub : {"info", "simulate", "eval"}) {
     const Result r = run(std::string(sub) + " --help");
     EXPECT_EQ(r.code, 0) << sub;
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << r.out;
@@ -99,6 +99,30 @@ TEST(Cli, SimulateWritesADatasetThatInfoValidates) {
   ASSERT_EQ(info.code, 0) << info.out;
   EXPECT_NE(info.out.find("groundtruth     101 states"), std::string::npos) << info.out;
   EXPECT_NE(info.out.find("valid: yes"), std::string::npos) << info.out;
+}
+
+TEST(Cli, EvalOnRealGroundTruthAgainstItself) {
+  const std::string gt = idyvins::test::sharedData("euroc_imu_gt_excerpt/mav0/gt0/data.csv");
+  const Result r = run("eval --gt " + gt + " --est " + gt + " --rpe 1,5");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("pairs: 3340"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("path length 75.881 m"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("rmse 0.000000"), std::string::npos) << r.out;
+}
+
+TEST(Cli, EvalBadInput) {
+  const Result missing = run("eval --gt /nonexistent.tum --est /nonexistent2.tum");
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_EQ(missing.out, "error: /nonexistent.tum: cannot open file (missing or unreadable)\n");
+  idyvins::test::TempDir dir;
+  idyvins::test::writeFile(dir / "a.tum", "1.0 0 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n");
+  idyvins::test::writeFile(dir / "b.tum", "5.0 0 0 0 0 0 0 1\n6.0 1 0 0 0 0 0 1\n");
+  const Result nomatch = run("eval --gt " + (dir / "a.tum") + " --est " + (dir / "b.tum"));
+  EXPECT_EQ(nomatch.code, 1);
+  EXPECT_NE(nomatch.out.find("no matching time stamps"), std::string::npos) << nomatch.out;
+  const Result align = run("eval --gt " + (dir / "a.tum") + " --est " + (dir / "a.tum") + " --align affine");
+  EXPECT_NE(align.code, 0);
+  EXPECT_NE(align.out.find("se3|sim3|posyaw|none"), std::string::npos) << align.out;
 }
 
 TEST(Cli, ImageSizeDifferentFromConfig) {

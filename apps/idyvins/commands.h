@@ -15,4 +15,7 @@ void registerInfo(CLI::App& app, int& exit_code);
 /// `idyvins simulate --scene S --level L --seed N --duration T --out DIR`.
 void registerSimulate(CLI::App& app, int& exit_code);
 
+/// `idyvins eval --gt GT --est EST [--align ...] [--rpe 1,5,10] [--json]`.
+void registerEval(CLI::App& app, int& exit_code);
+
 }  // namespace idyvins::app

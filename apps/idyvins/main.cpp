@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   int exit_code = kOk;
   registerInfo(app, exit_code);
   registerSimulate(app, exit_code);
+  registerEval(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
