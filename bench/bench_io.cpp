@@ -2,6 +2,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include "core/allocator.h"
+
 #include "io/data_source.h"
 #include "io/euroc_dataset.h"
 
@@ -32,4 +34,11 @@ BENCHMARK(BM_StreamStereoFrames)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  idyvins::configureAllocatorForStreaming();  // as the idyvins program does
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -3,6 +3,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include "core/allocator.h"
+
 #include <random>
 
 #include "backend/imu_factor.h"
@@ -162,4 +164,11 @@ BENCHMARK(BM_PinholeRadtanProjectWithJacobian);
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  idyvins::configureAllocatorForStreaming();  // as the idyvins program does
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include "test_util.h"
@@ -37,7 +38,7 @@ TEST(Cli, HelpForEverySubcommand) {
   const Result top = run("--help");
   EXPECT_EQ(top.code, 0);
   EXPECT_NE(top.out.find("info"), std::string::npos);
-  for (const char* sub : {"info", "simulate", "eval"}) {
+  for (const char* sub : {"info", "simulate", "eval", "track"}) {
     const Result r = run(std::string(sub) + " --help");
     EXPECT_EQ(r.code, 0) << sub;
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << r.out;
@@ -99,6 +100,11 @@ TEST(Cli, SimulateWritesADatasetThatInfoValidates) {
   ASSERT_EQ(info.code, 0) << info.out;
   EXPECT_NE(info.out.find("groundtruth     101 states"), std::string::npos) << info.out;
   EXPECT_NE(info.out.find("valid: yes"), std::string::npos) << info.out;
+  const Result track = run("track --config " + (dir / "ds/config/sim_stereo_imu_config.yaml") + " --dataset " +
+                           (dir / "ds") + " --mode seg --save-tracks " + (dir / "tracks"));
+  ASSERT_EQ(track.code, 0) << track.out;
+  EXPECT_NE(track.out.find("11 frames, mode seg"), std::string::npos) << track.out;
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir / "tracks"), std::filesystem::directory_iterator{}), 11);
 }
 
 TEST(Cli, EvalOnRealGroundTruthAgainstItself) {

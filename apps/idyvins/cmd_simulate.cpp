@@ -87,7 +87,7 @@ void registerSimulate(CLI::App& app, int& exit_code) {
   cmd->add_option("--image-noise", a->image_noise, "pixel noise sigma, gray levels");
   cmd->add_option("--threads", a->threads, "rendering threads")->check(CLI::Range(1, 64));
   cmd->add_flag("--opening-vehicle", a->opening_vehicle,
-                "a van crosses close in front of the drone during the first seconds");
+                "a vehicle crosses close in front of the drone during the first seconds");
   cmd->add_flag("--standard-set", a->standard_set,
                 "write city and parking_lot x none/low/mid/high into OUT/<scene>_<level>_s<seed>, "
                 "keeping folders that already hold a meta.json");

@@ -18,4 +18,7 @@ void registerSimulate(CLI::App& app, int& exit_code);
 /// `idyvins eval --gt GT --est EST [--align ...] [--rpe 1,5,10] [--json]`.
 void registerEval(CLI::App& app, int& exit_code);
 
+/// `idyvins track --config CFG --dataset DIR [--mode ...] [--save-tracks DIR]`.
+void registerTrack(CLI::App& app, int& exit_code);
+
 }  // namespace idyvins::app

@@ -4,10 +4,12 @@
 #include <exception>
 
 #include "commands.h"
+#include "core/allocator.h"
 #include "core/error.h"
 
 int main(int argc, char** argv) {
   using namespace idyvins::app;
+  idyvins::configureAllocatorForStreaming();
   CLI::App app{
       "idyvins: stereo visual-inertial odometry for scenes with moving objects.\n"
       "Implements IDY-VINS (inertial motion prior, dynamic landmark elimination and\n"
@@ -20,6 +22,7 @@ int main(int argc, char** argv) {
   registerInfo(app, exit_code);
   registerSimulate(app, exit_code);
   registerEval(app, exit_code);
+  registerTrack(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -33,6 +33,7 @@ struct StereoFrame {
   std::size_t index = 0;  ///< position of the pair in its dataset
   cv::Mat left;           ///< CV_8UC1
   cv::Mat right;          ///< CV_8UC1, empty for a monocular dataset
+  cv::Mat left_mask;      ///< CV_8UC1 object ids (0 = static) when the dataset has masks and they were asked for
 };
 
 /// A time-stamped pose of the body in the world: p_w_b and q_w_b (Hamilton, unit).

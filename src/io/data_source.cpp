@@ -4,8 +4,8 @@
 
 namespace idyvins::io {
 
-EurocSource::EurocSource(EurocDataset dataset, int expected_width, int expected_height)
-    : dataset_(std::move(dataset)), width_(expected_width), height_(expected_height) {}
+EurocSource::EurocSource(EurocDataset dataset, int expected_width, int expected_height, bool load_masks)
+    : dataset_(std::move(dataset)), width_(expected_width), height_(expected_height), load_masks_(load_masks) {}
 
 std::optional<Measurement> EurocSource::next() {
   const bool imu_left = next_imu_ < dataset_.imu.size();
@@ -25,6 +25,12 @@ std::optional<Measurement> EurocSource::next() {
   frame.left = loadGrayImage(dataset_.cam0[pair.i0], csv("cam0"), width_, height_);
   if (dataset_.stereo())
     frame.right = loadGrayImage(dataset_.cam1[pair.i1], csv("cam1"), width_, height_);
+  if (load_masks_) {
+    const std::filesystem::path image(dataset_.cam0[pair.i0].path);
+    ImageRecord mask = dataset_.cam0[pair.i0];
+    mask.path = (image.parent_path().parent_path() / "mask" / image.filename()).string();
+    frame.left_mask = loadGrayImage(mask, csv("cam0"), width_, height_);
+  }
   ++next_pair_;
   return Measurement{std::move(frame)};
 }

@@ -30,7 +30,9 @@ class DataSource {
 /// expected size (0 = no check).
 class EurocSource : public DataSource {
  public:
-  EurocSource(EurocDataset dataset, int expected_width, int expected_height);
+  /// With load_masks, mav0/cam0/mask/<image name> is read into StereoFrame::left_mask
+  /// (an error if missing: seg mode needs every mask).
+  EurocSource(EurocDataset dataset, int expected_width, int expected_height, bool load_masks = false);
   std::optional<Measurement> next() override;
   std::size_t frameCount() const override { return dataset_.pairs.size(); }
   const EurocDataset& dataset() const { return dataset_; }
@@ -38,6 +40,7 @@ class EurocSource : public DataSource {
  private:
   EurocDataset dataset_;
   int width_, height_;
+  bool load_masks_;
   std::size_t next_imu_ = 0, next_pair_ = 0;
 };
 

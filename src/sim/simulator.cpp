@@ -237,6 +237,36 @@ void writeVinsConfig(const Config& c, const std::string& folder, const std::stri
   writeText(dir / name, s);
 }
 
+Scene::Scene(const SimOptions& o)
+    : options_(o),
+      rig_(rigConfig(o)),
+      textures_(o.scene.seed),
+      world_(buildWorld(o.scene, textures_)),
+      trajectory_(o.scene.scene, o.scene.seed, o.g_norm),
+      frames_(static_cast<std::size_t>(std::floor(o.duration_s * o.camera_rate_hz + 1e-9)) + 1) {
+  for (int c = 0; c < 2; ++c) renderers_.emplace_back(rig_.cams[c], textures_);
+}
+
+Scene::Scene(const SimOptions& o, const std::function<void(World&, const TextureBank&)>& customize) : Scene(o) {
+  customize(world_, textures_);
+}
+
+SceneFrame Scene::renderFrame(std::size_t k) const {
+  SceneFrame f;
+  f.index = k;
+  f.t_s = static_cast<double>(k) / options_.camera_rate_hz;
+  f.t_ns = options_.t0_ns + static_cast<TimeNs>(k) * static_cast<TimeNs>(std::llround(1e9 / options_.camera_rate_hz));
+  const std::vector<Quad> quads = world_.quadsAt(f.t_s);
+  const BodyState s = trajectory_.at(f.t_s);
+  f.T_w_b = Eigen::Isometry3d::Identity();
+  f.T_w_b.linear() = s.q_w_b.toRotationMatrix();
+  f.T_w_b.translation() = s.p_w_b;
+  for (int c = 0; c < 2; ++c)
+    f.cam[c] = renderers_[c].render(quads, f.T_w_b * rig_.T_b_c[c], world_.sky, options_.image_noise_sigma,
+                                    options_.scene.seed * 1000003ull + k * 2 + c);
+  return f;
+}
+
 SimResult simulate(const SimOptions& o, const std::string& out_dir,
                    const std::function<void(std::size_t, std::size_t)>& progress) {
   const auto start = std::chrono::steady_clock::now();
@@ -246,10 +276,10 @@ SimResult simulate(const SimOptions& o, const std::string& out_dir,
     fs::create_directories(mav0 / sub, ec);
     if (ec) throw InputError((mav0 / sub).string(), "cannot create folder: " + ec.message());
   }
-  const Config rig = rigConfig(o);
-  const TextureBank textures(o.scene.seed);
-  const World world = buildWorld(o.scene, textures);
-  const Trajectory traj(o.scene.scene, o.scene.seed, o.g_norm);
+  const Scene scene(o);
+  const Config& rig = scene.rig();
+  const World& world = scene.world();
+  const Trajectory& traj = scene.trajectory();
 
   SimResult result;
   std::vector<ImuSample> imu;
@@ -261,13 +291,12 @@ SimResult simulate(const SimOptions& o, const std::string& out_dir,
   writeSensorYamls(mav0, rig, o);
   writeVinsConfig(rig, (root / "config").string(), "sim_stereo_imu_config.yaml");
 
-  const std::size_t frames = static_cast<std::size_t>(std::floor(o.duration_s * o.camera_rate_hz + 1e-9)) + 1;
+  const std::size_t frames = scene.frameCount();
   const TimeNs frame_dt = static_cast<TimeNs>(std::llround(1e9 / o.camera_rate_hz));
   result.frames = frames;
   std::vector<TimeNs> stamps(frames);
   for (std::size_t k = 0; k < frames; ++k) stamps[k] = o.t0_ns + static_cast<TimeNs>(k) * frame_dt;
   std::vector<double> coverage(frames, 0.0);
-  const Renderer renderers[2] = {Renderer(rig.cams[0], textures), Renderer(rig.cams[1], textures)};
 
   std::atomic<std::size_t> next{0}, done{0};
   std::atomic<bool> failed{false};
@@ -276,16 +305,10 @@ SimResult simulate(const SimOptions& o, const std::string& out_dir,
   auto worker = [&]() {
     try {
       for (std::size_t k = next++; k < frames; k = next++) {
-        const double t = static_cast<double>(k) / o.camera_rate_hz;
-        const std::vector<Quad> quads = world.quadsAt(t);
-        const BodyState s = traj.at(t);
-        Eigen::Isometry3d T_w_b = Eigen::Isometry3d::Identity();
-        T_w_b.linear() = s.q_w_b.toRotationMatrix();
-        T_w_b.translation() = s.p_w_b;
+        const SceneFrame f = scene.renderFrame(k);
         const std::string name = std::to_string(stamps[k]) + ".png";
         for (int c = 0; c < 2; ++c) {
-          const RenderOutput r = renderers[c].render(quads, T_w_b * rig.T_b_c[c], world.sky, o.image_noise_sigma,
-                                                     o.scene.seed * 1000003ull + k * 2 + c);
+          const RenderOutput& r = f.cam[c];
           const fs::path cam = mav0 / ("cam" + std::to_string(c));
           if (!cv::imwrite((cam / "data" / name).string(), r.image) ||
               !cv::imwrite((cam / "mask" / name).string(), r.mask))

@@ -9,6 +9,7 @@
 
 #include "core/measurements.h"
 #include "io/config.h"
+#include "sim/renderer.h"
 #include "sim/trajectory.h"
 #include "sim/world.h"
 
@@ -58,6 +59,41 @@ struct SimResult {
   double path_length_m = 0;
   Coverage coverage;
   double seconds = 0;  ///< wall time
+};
+
+/// One rendered stereo frame with its ground truth.
+struct SceneFrame {
+  std::size_t index = 0;
+  TimeNs t_ns = 0;
+  double t_s = 0;              ///< seconds since the start
+  Eigen::Isometry3d T_w_b;     ///< body pose
+  RenderOutput cam[2];         ///< left, right: image, mask, depth
+};
+
+/// A scene ready to render in memory: rig, textures, world, trajectory, renderers.
+/// renderFrame is const and thread-safe.
+class Scene {
+ public:
+  explicit Scene(const SimOptions& options);
+  /// Same, letting the caller add to or change the world (tests, custom scenes).
+  Scene(const SimOptions& options, const std::function<void(World&, const TextureBank&)>& customize);
+  Scene(const Scene&) = delete;  // renderers refer to the texture bank
+  Scene& operator=(const Scene&) = delete;
+  std::size_t frameCount() const { return frames_; }
+  SceneFrame renderFrame(std::size_t k) const;
+  const Config& rig() const { return rig_; }
+  const World& world() const { return world_; }
+  const Trajectory& trajectory() const { return trajectory_; }
+  const SimOptions& options() const { return options_; }
+
+ private:
+  SimOptions options_;
+  Config rig_;
+  TextureBank textures_;
+  World world_;
+  Trajectory trajectory_;
+  std::vector<Renderer> renderers_;
+  std::size_t frames_;
 };
 
 /// Writes the dataset into out_dir (created). `progress(done, total)` is called

@@ -175,9 +175,9 @@ World buildCity(const SceneOptions& o, const TextureBank& tex) {
     for (int k = 0; k < 6; ++k) add(4 + k, k % 3 ? "car" : "van", rnd(5, 10), rnd(0, 160));
   }
   if (o.opening_vehicle) {
-    // A van crossing close in front of the drone during the first seconds.
-    lanes.push_back({{6.0, -14.0, 0}, {0, 1, 0}, 400});
-    add(static_cast<int>(lanes.size()) - 1, "van", 4.0, 5.0);
+    // A truck crossing 5-8 m in front of the drone during the first seconds.
+    lanes.push_back({{10.0, -14.0, 0}, {0, 1, 0}, 400});
+    add(static_cast<int>(lanes.size()) - 1, "truck", 3.0, 6.0);
   }
   addVehicles(w, lanes, lane_of, types, speeds, offsets, tex);
   return w;

@@ -1,0 +1,53 @@
+#pragma once
+// What the front end hands to the back end for one stereo frame.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+#include "core/time.h"
+
+namespace idyvins::frontend {
+
+/// Label of a feature / landmark with respect to scene motion (DESIGN §4.3–4.6).
+enum class FeatureLabel : std::uint8_t { kStatic = 0, kCandidate = 1, kEliminated = 2 };
+
+/// One tracked feature in the current frame.
+struct Feature {
+  std::uint64_t id = 0;
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();     ///< left pixel (distorted image)
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();     ///< left normalized, undistorted (x/z, y/z)
+  bool has_right = false;
+  Eigen::Vector2d uv_right = Eigen::Vector2d::Zero();
+  Eigen::Vector2d xy_right = Eigen::Vector2d::Zero();
+  Eigen::Vector2d velocity_px = Eigen::Vector2d::Zero();  ///< left pixel velocity, px/s
+  int track_length = 1;  ///< frames this id has been tracked (1 = new)
+  FeatureLabel label = FeatureLabel::kStatic;
+  double score = 0;      ///< filter's per-feature score (IDY: d_s, px²), 0 if none
+};
+
+/// The front end's output for one frame.
+struct FeatureFrame {
+  TimeNs t_ns = 0;
+  std::vector<Feature> features;
+  std::vector<Feature> removed;  ///< features the filter removed in this frame (label kEliminated)
+  double tracking_ms = 0;  ///< KLT, detection, stereo, undistortion
+  double filter_ms = 0;    ///< the rejection filter (ransac / seg / idy preprocessing)
+  std::size_t tracked = 0;     ///< features carried over from the previous frame (before the filter)
+  std::size_t rejected = 0;    ///< removed by the filter in this frame
+  std::size_t detected = 0;    ///< new corners
+};
+
+/// Relative motion of the left camera predicted between the previous and the
+/// current frame (from the IMU and the newest state): R_ck_ck1, t_ck_ck1 map
+/// points of the current camera into the previous one; cov_p is the body
+/// position covariance. valid = false before the estimator is initialized.
+struct MotionPrior {
+  bool valid = false;
+  Eigen::Quaterniond q_prev_cur = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d t_prev_cur = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d cov_p = Eigen::Matrix3d::Zero();
+};
+
+}  // namespace idyvins::frontend

@@ -1,0 +1,267 @@
+#include "frontend/feature_tracker.h"
+
+#include <algorithm>
+#include <chrono>
+#include <numeric>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+#include <unordered_map>
+
+#include "core/so3.h"
+
+namespace idyvins::frontend {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+Eigen::Vector2d toEigen(const cv::Point2f& p) { return {p.x, p.y}; }
+}  // namespace
+
+FeatureTracker::FeatureTracker(const Config& config, const TrackerParams& params) : config_(config), params_(params) {
+  for (const auto& c : config.cams) cams_.push_back(camera::makeCamera(c));
+  if (config.num_cam == 2) {
+    const Eigen::Isometry3d T_c1_c0 = config.T_b_c[1].inverse() * config.T_b_c[0];
+    E_c1_c0_ = hat(T_c1_c0.translation()) * T_c1_c0.linear();
+  }
+}
+
+void FeatureTracker::reset() {
+  prev_pyr_.clear();
+  prev_tracks_.clear();
+}
+
+bool FeatureTracker::inBorder(const cv::Point2f& p) const {
+  const int b = params_.border_px;
+  return p.x >= b && p.y >= b && p.x < config_.image_width - b && p.y < config_.image_height - b;
+}
+
+void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, std::vector<Track>& tracks,
+                                   std::vector<Eigen::Vector2d>& prev_uv, std::vector<Eigen::Vector2d>& prev_xy) {
+  if (prev_pyr_.empty() || prev_tracks_.empty()) return;
+  std::vector<cv::Point2f> p0, p1, back;
+  for (const auto& t : prev_tracks_) p0.push_back(t.uv);
+  std::vector<uchar> status, status_back;
+  std::vector<float> err;
+  const cv::Size win(params_.klt_window, params_.klt_window);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations, params_.klt_epsilon);
+  cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, p0, p1, status, err, win, params_.klt_levels, crit);
+  if (config_.tracker.flow_back) {
+    back = p0;
+    cv::calcOpticalFlowPyrLK(pyr, prev_pyr_, p1, back, status_back, err, win, params_.klt_levels, crit,
+                             cv::OPTFLOW_USE_INITIAL_FLOW);
+  }
+  for (std::size_t i = 0; i < p0.size(); ++i) {
+    bool ok = status[i] && inBorder(p1[i]);
+    if (ok && config_.tracker.flow_back)
+      ok = status_back[i] && cv::norm(back[i] - p0[i]) <= params_.flow_back_px;
+    if (!ok) continue;
+    Eigen::Vector2d xy;
+    if (!cams_[0]->liftToNormalized(toEigen(p1[i]), xy)) continue;
+    const Track& old = prev_tracks_[i];
+    tracks.push_back({old.id, p1[i], xy, old.length + 1});
+    prev_uv.push_back(toEigen(old.uv));
+    prev_xy.push_back(old.xy);
+  }
+}
+
+void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected) {
+  // Keep long tracks first; drop tracks closer than min_dist to a longer one.
+  std::vector<std::size_t> order(tracks.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tracks[a].length > tracks[b].length; });
+  detect_mask_.create(image.size(), CV_8UC1);
+  detect_mask_.setTo(cv::Scalar(255));
+  cv::Mat& mask = detect_mask_;
+  const int r = static_cast<int>(config_.tracker.min_dist);
+  std::vector<Track> kept;
+  for (std::size_t i : order) {
+    const cv::Point pt(cvRound(tracks[i].uv.x), cvRound(tracks[i].uv.y));
+    if (mask.at<uchar>(pt) != 255) continue;
+    kept.push_back(tracks[i]);
+    cv::circle(mask, pt, r, cv::Scalar(0), cv::FILLED);
+  }
+  tracks = std::move(kept);
+  const int n_max = config_.tracker.max_cnt - static_cast<int>(tracks.size());
+  detected = 0;
+  if (n_max <= 0) return;
+  std::vector<cv::Point2f> corners;
+  cv::goodFeaturesToTrack(image, corners, n_max, 0.01, config_.tracker.min_dist, mask);
+  for (const auto& c : corners) {
+    Eigen::Vector2d xy;
+    if (!inBorder(c) || !cams_[0]->liftToNormalized(toEigen(c), xy)) continue;
+    tracks.push_back({next_id_++, c, xy, 1});
+    ++detected;
+  }
+}
+
+void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, const cv::Mat& right,
+                                std::vector<Feature>& features) {
+  if (features.empty() || right.empty() || cams_.size() < 2) return;
+  const cv::Size win(params_.klt_window, params_.klt_window);
+  std::vector<cv::Mat>& right_pyr = right_pyr_;
+  cv::buildOpticalFlowPyramid(right, right_pyr, win, params_.klt_levels);
+  std::vector<cv::Point2f> pl, pr, back;
+  for (const auto& f : features) pl.emplace_back(static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y()));
+  std::vector<uchar> status, status_back;
+  std::vector<float> err;
+  cv::calcOpticalFlowPyrLK(left_pyr, right_pyr, pl, pr, status, err, win, params_.klt_levels);
+  if (config_.tracker.flow_back) {
+    back = pl;
+    cv::calcOpticalFlowPyrLK(right_pyr, left_pyr, pr, back, status_back, err, win, params_.klt_levels,
+                             cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01),
+                             cv::OPTFLOW_USE_INITIAL_FLOW);
+  }
+  const double f = cams_[1]->focal();
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    bool ok = status[i] && inBorder(pr[i]);
+    if (ok && config_.tracker.flow_back) ok = status_back[i] && cv::norm(back[i] - pl[i]) <= params_.flow_back_px;
+    Eigen::Vector2d xy_r;
+    if (!ok || !cams_[1]->liftToNormalized(toEigen(pr[i]), xy_r)) continue;
+    // Epipolar check with the known extrinsics (distance to the line, in pixels).
+    const Eigen::Vector3d x0(features[i].xy.x(), features[i].xy.y(), 1.0), x1(xy_r.x(), xy_r.y(), 1.0);
+    const Eigen::Vector3d line = E_c1_c0_ * x0;
+    const double dist = std::abs(x1.dot(line)) / std::max(line.head<2>().norm(), 1e-12);
+    if (dist * f > params_.stereo_epipolar_px) continue;
+    features[i].has_right = true;
+    features[i].uv_right = toEigen(pr[i]);
+    features[i].xy_right = xy_r;
+  }
+}
+
+FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& prior, FeatureFilter* filter,
+                                   const cv::Mat* mask) {
+  const auto start = Clock::now();
+  FeatureFrame out;
+  out.t_ns = frame.t_ns;
+  std::vector<cv::Mat>& pyr = cur_pyr_;
+  cv::buildOpticalFlowPyramid(frame.left, pyr, cv::Size(params_.klt_window, params_.klt_window), params_.klt_levels);
+
+  std::vector<Track> tracks;
+  std::vector<Eigen::Vector2d> prev_uv, prev_xy;
+  trackPrevious(pyr, tracks, prev_uv, prev_xy);
+  out.tracked = tracks.size();
+  const double dt = prev_pyr_.empty() ? 0.0 : toSeconds(frame.t_ns - prev_t_ns_);
+
+  // Rejection filter on tracked features (before the top-up, so holes refill now).
+  double filter_ms = 0;
+  FilterContext ctx{cams_[0].get(), &prior, mask, prev_t_ns_, frame.t_ns};
+  auto runFilter = [&](std::vector<Track>& list, const std::vector<Eigen::Vector2d>* puv,
+                       const std::vector<Eigen::Vector2d>* pxy, std::vector<Feature>& feats) {
+    feats.clear();
+    for (const auto& t : list) {
+      Feature f;
+      f.id = t.id;
+      f.uv = toEigen(t.uv);
+      f.xy = t.xy;
+      f.track_length = t.length;
+      feats.push_back(f);
+    }
+    if (!filter) return;
+    const auto t0 = Clock::now();
+    std::vector<FilterItem> items(feats.size());
+    for (std::size_t i = 0; i < feats.size(); ++i) {
+      items[i].feature = &feats[i];
+      items[i].tracked = puv != nullptr;
+      if (puv) {
+        items[i].prev_uv = (*puv)[i];
+        items[i].prev_xy = (*pxy)[i];
+      }
+    }
+    filter->apply(ctx, items);
+    std::vector<Track> kept_tracks;
+    std::vector<Feature> kept_feats;
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      if (items[i].remove) {
+        Feature r = feats[i];
+        r.label = FeatureLabel::kEliminated;
+        out.removed.push_back(r);
+      } else {
+        kept_tracks.push_back(list[i]);
+        kept_feats.push_back(feats[i]);
+      }
+    }
+    list = std::move(kept_tracks);
+    feats = std::move(kept_feats);
+    filter_ms += msSince(t0);
+  };
+  std::vector<Feature> tracked_feats;
+  runFilter(tracks, &prev_uv, &prev_xy, tracked_feats);
+  std::unordered_map<std::uint64_t, Feature> carried;  // id -> feature as the filter labelled it
+  for (const auto& f : tracked_feats) carried.emplace(f.id, f);
+  out.rejected = out.removed.size();
+
+  detectNew(frame.left, tracks, out.detected);
+  std::vector<Track> fresh;
+  for (const auto& t : tracks)
+    if (t.length == 1) fresh.push_back(t);
+  std::vector<Feature> fresh_feats;
+  runFilter(fresh, nullptr, nullptr, fresh_feats);  // seg may remove new corners on moving objects
+  std::unordered_map<std::uint64_t, bool> fresh_kept;
+  for (const auto& f : fresh_feats) fresh_kept[f.id] = true;
+
+  std::vector<Track> final_tracks;
+  for (const auto& t : tracks) {
+    if (t.length == 1) {
+      if (!fresh_kept.count(t.id)) continue;
+      Feature f;
+      f.id = t.id;
+      f.uv = toEigen(t.uv);
+      f.xy = t.xy;
+      f.track_length = 1;
+      out.features.push_back(f);
+    } else {
+      auto it = carried.find(t.id);
+      if (it == carried.end()) continue;
+      out.features.push_back(it->second);
+    }
+    final_tracks.push_back(t);
+  }
+  // Pixel velocity from the previous observation.
+  if (dt > 0) {
+    std::unordered_map<std::uint64_t, cv::Point2f> prev_pos;
+    for (const auto& t : prev_tracks_) prev_pos[t.id] = t.uv;
+    for (auto& f : out.features) {
+      auto it = prev_pos.find(f.id);
+      if (it != prev_pos.end()) f.velocity_px = (f.uv - toEigen(it->second)) / dt;
+    }
+  }
+  matchRight(pyr, frame.right, out.features);
+
+  std::swap(prev_pyr_, cur_pyr_);  // keep both pyramids' buffers for the next frame
+  prev_tracks_ = std::move(final_tracks);
+  prev_t_ns_ = frame.t_ns;
+  out.filter_ms = filter_ms;
+  out.tracking_ms = msSince(start) - filter_ms;
+  return out;
+}
+
+cv::Mat drawTracks(const cv::Mat& left, const FeatureFrame& frame) {
+  cv::Mat out;
+  cv::cvtColor(left, out, cv::COLOR_GRAY2BGR);
+  auto color = [](FeatureLabel l) {
+    switch (l) {
+      case FeatureLabel::kStatic: return cv::Scalar(0, 220, 0);
+      case FeatureLabel::kCandidate: return cv::Scalar(0, 220, 255);
+      case FeatureLabel::kEliminated: return cv::Scalar(0, 0, 255);
+    }
+    return cv::Scalar(255, 255, 255);
+  };
+  auto draw = [&](const Feature& f) {
+    const cv::Point2f p(static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y()));
+    const cv::Scalar c = color(f.label);
+    if (f.velocity_px.squaredNorm() > 0) {
+      const Eigen::Vector2d back = f.uv - f.velocity_px * 0.05;
+      cv::line(out, p, cv::Point2f(static_cast<float>(back.x()), static_cast<float>(back.y())), c, 1, cv::LINE_AA);
+    }
+    cv::circle(out, p, f.label == FeatureLabel::kEliminated ? 4 : 3, c, f.has_right ? cv::FILLED : 1, cv::LINE_AA);
+  };
+  for (const auto& f : frame.features) draw(f);
+  for (const auto& f : frame.removed) draw(f);
+  char text[160];
+  std::snprintf(text, sizeof(text), "%zu features, %zu removed, %zu new", frame.features.size(), frame.removed.size(),
+                frame.detected);
+  cv::putText(out, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  return out;
+}
+
+}  // namespace idyvins::frontend
