@@ -21,4 +21,7 @@ void registerEval(CLI::App& app, int& exit_code);
 /// `idyvins track --config CFG --dataset DIR [--mode ...] [--save-tracks DIR]`.
 void registerTrack(CLI::App& app, int& exit_code);
 
+/// `idyvins run --config CFG --dataset DIR --out OUT [--mode ...]`.
+void registerRun(CLI::App& app, int& exit_code);
+
 }  // namespace idyvins::app

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   registerSimulate(app, exit_code);
   registerEval(app, exit_code);
   registerTrack(app, exit_code);
+  registerRun(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,460 @@
+#include "backend/estimator.h"
+
+#include <ceres/ceres.h>
+
+#include <chrono>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <unordered_map>
+
+#include "backend/imu_factor.h"
+#include "backend/initializer.h"
+#include "backend/parameter_blocks.h"
+#include "core/so3.h"
+
+namespace idyvins::backend {
+
+using Eigen::Isometry3d;
+using Eigen::Quaterniond;
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+namespace {
+Extrinsic toExtrinsic(const Isometry3d& T) {
+  Extrinsic e;
+  e.q_b_c = Quaterniond(T.linear()).normalized();
+  e.t_b_c = T.translation();
+  return e;
+}
+
+ceres::Problem::Options borrowing() {
+  ceres::Problem::Options o;
+  o.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  o.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  o.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  return o;
+}
+
+/// The projection factors of one landmark: (cost, block list, whether the pose blocks are involved).
+struct LandmarkFactor {
+  std::shared_ptr<ceres::CostFunction> cost;
+  int frame;  ///< -1 for the one-frame stereo factor
+};
+
+std::vector<LandmarkFactor> landmarkFactors(const Landmark& lm, const Rig& rig, const ProjectionWeight& w) {
+  std::vector<LandmarkFactor> out;
+  const Observation& a = lm.obs.front();
+  for (std::size_t k = 0; k < lm.obs.size(); ++k) {
+    const Observation& o = lm.obs[k];
+    const int frame = lm.start_frame + static_cast<int>(k);
+    if (k > 0) out.push_back({std::make_shared<ProjectionTwoFrame>(a.xy, o.xy, rig.T_b_c0, rig.T_b_c0, w), frame});
+    if (rig.stereo && o.has_right) {
+      if (k == 0)
+        out.push_back({std::make_shared<ProjectionOneFrameTwoCam>(a.xy, o.xy_right, rig.T_b_c0, rig.T_b_c1, w), -1});
+      else
+        out.push_back({std::make_shared<ProjectionTwoFrame>(a.xy, o.xy_right, rig.T_b_c0, rig.T_b_c1, w), frame});
+    }
+  }
+  return out;
+}
+
+const PoseManifold kPoseManifold;
+}  // namespace
+
+Isometry3d Estimator::Frame::T_w_b() const {
+  Isometry3d T = Isometry3d::Identity();
+  T.linear() = Eigen::Map<const Quaterniond>(pose.data() + 3).normalized().toRotationMatrix();
+  T.translation() = Eigen::Map<const Vector3d>(pose.data());
+  return T;
+}
+
+imu::NavState Estimator::Frame::nav() const { return navStateFromBlocks(pose.data(), sb.data()); }
+
+void Estimator::Frame::setNav(const imu::NavState& s) {
+  setPose(s.p_w_b, s.q_w_b, pose.data());
+  Eigen::Map<Eigen::Matrix<double, 9, 1>> v(sb.data());
+  v << s.v_w, s.ba, s.bg;
+}
+
+Estimator::Estimator(const Config& config, const EstimatorOptions& options) : config_(config), options_(options) {
+  rig_.T_b_c0 = toExtrinsic(config.T_b_c[0]);
+  rig_.stereo = config.num_cam == 2;
+  if (rig_.stereo) rig_.T_b_c1 = toExtrinsic(config.T_b_c[1]);
+  rig_.focal_px = 0.5 * (config.cams[0].fx + config.cams[0].fy);
+  noise_ = config.imu;
+}
+
+void Estimator::addImu(const ImuSample& s) {
+  if (!imu_.empty() && s.t_ns <= imu_.back().t_ns) return;
+  imu_.push_back(s);
+}
+
+LatestState Estimator::latest() const {
+  LatestState l;
+  if (!initialized_ || count_ < 0) return l;
+  l.valid = true;
+  l.t_ns = frames_[count_].t_ns;
+  l.state = frames_[count_].nav();
+  return l;
+}
+
+void Estimator::resetWindow() {
+  count_ = -1;
+  initialized_ = false;
+  fm_.clear();
+  prior_.reset();
+  for (auto& f : frames_) f.pre.reset();
+}
+
+std::unique_ptr<imu::Preintegration> Estimator::integrate(TimeNs t0, TimeNs t1, const imu::NavState& from) const {
+  if (imu_.empty() || imu_.front().t_ns > t0 || imu_.back().t_ns < t1) return nullptr;
+  return std::make_unique<imu::Preintegration>(imu::integrateBetween(imu_, t0, t1, from.ba, from.bg, noise_));
+}
+
+std::vector<Isometry3d> Estimator::windowPoses() const {
+  std::vector<Isometry3d> T;
+  for (int i = 0; i <= count_; ++i) T.push_back(frames_[i].T_w_b());
+  return T;
+}
+
+FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
+  FrameResult r;
+  r.t_ns = ff.t_ns;
+  if (count_ >= 0 && ff.t_ns <= frames_[count_].t_ns) {
+    r.status = "skipped: time stamp not after the previous frame";
+    return r;
+  }
+  const int n = count_ + 1;
+  Frame& f = frames_[n];
+  f.t_ns = ff.t_ns;
+  if (n == 0) {
+    f.setNav(imu::NavState{});
+    f.pre.reset();
+  } else {
+    const imu::NavState prev = frames_[n - 1].nav();
+    f.pre = integrate(frames_[n - 1].t_ns, ff.t_ns, prev);
+    if (!f.pre) {
+      r.status = "reset: no IMU data between frames";
+      r.reset = initialized_;
+      resetWindow();
+      return r;
+    }
+    f.setNav(f.pre->predict(prev));
+  }
+  count_ = n;
+  r.keyframe = fm_.addFrame(n, ff, config_.solver.keyframe_parallax_px, rig_.focal_px);
+
+  if (!initialized_) {
+    if (!initStep(r)) return r;
+  } else {
+    fm_.triangulate(windowPoses(), rig_);
+  }
+  optimize(r);
+  removeOutliers();
+  fm_.removeFailures();
+  std::string why;
+  if (failureDetected(why)) {
+    r.reset = true;
+    r.status = "reset: " + why;
+    resetWindow();
+    return r;
+  }
+  r.initialized = true;
+  if (r.status.empty()) r.status = "tracking";
+  r.state = frames_[count_].nav();
+  last_T_w_b_ = frames_[count_].T_w_b();
+  slide(r.keyframe);
+  return r;
+}
+
+bool Estimator::initStep(FrameResult& r) {
+  const int n = count_;
+  if (n > 0) {
+    if (!pnp(n)) {
+      r.status = "initializing: PnP failed, restarting";
+      resetWindow();
+      return false;
+    }
+    // Check the visual rotation against the gyroscope before accepting the frame.
+    const Quaterniond q_vis = Quaterniond(frames_[n - 1].T_w_b().linear()).conjugate() *
+                              Quaterniond(frames_[n].T_w_b().linear());
+    const double diff_deg = q_vis.angularDistance(frames_[n].pre->deltaQ()) * 180.0 / M_PI;
+    if (diff_deg > options_.init_rotation_check_deg) {
+      r.status = "initializing: PnP rotation disagrees with the gyroscope, restarting";
+      resetWindow();
+      return false;
+    }
+  }
+  fm_.triangulate(windowPoses(), rig_);
+  if (n < kWindowSize) {
+    r.status = "initializing: " + std::to_string(n + 1) + "/" + std::to_string(kWindowSize + 1) + " frames";
+    return false;
+  }
+  if (!alignAndStart()) {
+    r.status = "initializing: gravity/velocity alignment failed, sliding";
+    slide(true);
+    return false;
+  }
+  r.status = "initialized";
+  return true;
+}
+
+bool Estimator::pnp(int n) {
+  std::vector<cv::Point3d> obj;
+  std::vector<cv::Point2d> img;
+  std::vector<std::uint64_t> ids;
+  for (const auto& [id, lm] : fm_.landmarks()) {
+    if (lm.inv_depth <= 0 || lm.start_frame >= n || lm.endFrame() != n) continue;
+    const Observation& a = lm.obs.front();
+    const Vector3d p_c(a.xy.x() / lm.inv_depth, a.xy.y() / lm.inv_depth, 1.0 / lm.inv_depth);
+    const Vector3d p_w = cameraPose(frames_[lm.start_frame].T_w_b(), rig_.T_b_c0) * p_c;
+    obj.emplace_back(p_w.x(), p_w.y(), p_w.z());
+    img.emplace_back(lm.obs.back().xy.x(), lm.obs.back().xy.y());
+    ids.push_back(id);
+  }
+  if (static_cast<int>(obj.size()) < options_.min_pnp_points) return false;
+  // Initial guess: the previous camera pose.
+  const Isometry3d T_c_w = cameraPose(frames_[n - 1].T_w_b(), rig_.T_b_c0).inverse();
+  cv::Mat rvec, tvec;
+  cv::Mat R_cv;
+  cv::eigen2cv(Eigen::Matrix3d(T_c_w.linear()), R_cv);
+  cv::Rodrigues(R_cv, rvec);
+  cv::eigen2cv(Vector3d(T_c_w.translation()), tvec);
+  std::vector<int> inliers;
+  const bool ok = cv::solvePnPRansac(obj, img, cv::Mat::eye(3, 3, CV_64F), cv::Mat(), rvec, tvec, true, 100,
+                                     2.0 / rig_.focal_px, 0.99, inliers, cv::SOLVEPNP_ITERATIVE);
+  if (!ok || static_cast<int>(inliers.size()) < options_.min_pnp_points) return false;
+  // Drop the landmarks PnP found inconsistent (moving objects, bad tracks).
+  std::vector<bool> is_inlier(ids.size(), false);
+  for (int i : inliers) is_inlier[i] = true;
+  std::vector<std::uint64_t> outliers;
+  for (std::size_t i = 0; i < ids.size(); ++i)
+    if (!is_inlier[i]) outliers.push_back(ids[i]);
+  fm_.remove(outliers);
+  cv::Rodrigues(rvec, R_cv);
+  Eigen::Matrix3d R;
+  Vector3d t;
+  cv::cv2eigen(R_cv, R);
+  cv::cv2eigen(tvec, t);
+  Isometry3d T_c_w_new = Isometry3d::Identity();
+  T_c_w_new.linear() = R;
+  T_c_w_new.translation() = t;
+  Isometry3d T_b_c = Isometry3d::Identity();
+  T_b_c.linear() = rig_.T_b_c0.q_b_c.toRotationMatrix();
+  T_b_c.translation() = rig_.T_b_c0.t_b_c;
+  const Isometry3d T_w_b = T_c_w_new.inverse() * T_b_c.inverse();
+  imu::NavState s = frames_[n].nav();
+  s.p_w_b = T_w_b.translation();
+  s.q_w_b = Quaterniond(T_w_b.linear()).normalized();
+  frames_[n].setNav(s);
+  return true;
+}
+
+bool Estimator::alignAndStart() {
+  std::vector<Quaterniond> q;
+  std::vector<const imu::Preintegration*> pre;
+  for (int i = 0; i <= count_; ++i) {
+    q.push_back(Quaterniond(frames_[i].T_w_b().linear()));
+    pre.push_back(frames_[i].pre.get());
+  }
+  const Vector3d bg = solveGyroBias(q, pre);
+  for (int i = 1; i <= count_; ++i) frames_[i].pre->repropagate(Vector3d::Zero(), bg);
+  const Alignment a = alignVelocityGravity(windowPoses(), pre, noise_.g_norm);
+  if (!a.ok) return false;
+  const Quaterniond R0 = Quaterniond::FromTwoVectors(a.g_w, Vector3d::UnitZ());
+  for (int i = 0; i <= count_; ++i) {
+    imu::NavState s = frames_[i].nav();
+    s.p_w_b = R0 * s.p_w_b;
+    s.q_w_b = (R0 * s.q_w_b).normalized();
+    s.v_w = R0 * a.v_w[i];
+    s.bg = bg;
+    s.ba.setZero();
+    frames_[i].setNav(s);
+  }
+  initialized_ = true;
+  return true;
+}
+
+void Estimator::optimize(FrameResult& r) {
+  const auto start = std::chrono::steady_clock::now();
+  ceres::Problem problem(borrowing());
+  std::vector<std::shared_ptr<ceres::CostFunction>> costs;
+  ceres::HuberLoss huber(options_.huber_px);
+  for (int i = 0; i <= count_; ++i) {
+    problem.AddParameterBlock(frames_[i].pose.data(), 7, const_cast<PoseManifold*>(&kPoseManifold));
+    problem.AddParameterBlock(frames_[i].sb.data(), 9);
+  }
+  if (prior_) {
+    costs.push_back(std::make_shared<MarginalizationFactor>(prior_));
+    problem.AddResidualBlock(costs.back().get(), nullptr, prior_->blocks);
+  }
+  for (int i = 1; i <= count_; ++i) {
+    if (frames_[i].pre->sumDt() > 10.0) continue;
+    costs.push_back(std::make_shared<ImuFactor>(frames_[i].pre.get()));
+    problem.AddResidualBlock(costs.back().get(), nullptr, frames_[i - 1].pose.data(), frames_[i - 1].sb.data(),
+                             frames_[i].pose.data(), frames_[i].sb.data());
+  }
+  const ProjectionWeight w{rig_.focal_px, options_.sigma_px, nullptr};
+  int used = 0;
+  for (auto& [id, lm] : fm_.landmarks()) {
+    if (!lm.usable()) continue;
+    ++used;
+    for (const auto& lf : landmarkFactors(lm, rig_, w)) {
+      costs.push_back(lf.cost);
+      if (lf.frame < 0)
+        problem.AddResidualBlock(lf.cost.get(), &huber, &lm.inv_depth);
+      else
+        problem.AddResidualBlock(lf.cost.get(), &huber, frames_[lm.start_frame].pose.data(),
+                                 frames_[lf.frame].pose.data(), &lm.inv_depth);
+    }
+  }
+  ceres::Solver::Options o;
+  o.linear_solver_type = ceres::DENSE_SCHUR;
+  o.trust_region_strategy_type = ceres::DOGLEG;
+  o.max_num_iterations = config_.solver.max_num_iterations;
+  o.max_solver_time_in_seconds = config_.solver.max_solver_time_s;
+  o.num_threads = 1;  // deterministic
+  ceres::Solver::Summary summary;
+  ceres::Solve(o, &problem, &summary);
+  for (int i = 1; i <= count_; ++i) {
+    const imu::NavState s = frames_[i - 1].nav();
+    if (frames_[i].pre->needsRepropagation(s.ba, s.bg)) frames_[i].pre->repropagate(s.ba, s.bg);
+  }
+  r.landmarks = used;
+  r.optimization_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+void Estimator::removeOutliers() {
+  std::vector<std::uint64_t> bad;
+  for (const auto& [id, lm] : fm_.landmarks()) {
+    if (!lm.usable()) continue;
+    const Observation& a = lm.obs.front();
+    const Vector3d pts_i(a.xy.x(), a.xy.y(), 1.0);
+    const imu::NavState si = frames_[lm.start_frame].nav();
+    double sum = 0;
+    int n = 0;
+    for (std::size_t k = 1; k < lm.obs.size(); ++k) {
+      const imu::NavState sj = frames_[lm.start_frame + k].nav();
+      const Vector3d p = transferPoint(pts_i, lm.inv_depth, si.p_w_b, si.q_w_b, sj.p_w_b, sj.q_w_b, rig_.T_b_c0, rig_.T_b_c0);
+      sum += (p.head<2>() / p.z() - lm.obs[k].xy).norm() * rig_.focal_px;
+      ++n;
+    }
+    if (n > 0 && sum / n > options_.outlier_px) bad.push_back(id);
+  }
+  fm_.remove(bad);
+}
+
+bool Estimator::failureDetected(std::string& why) const {
+  const imu::NavState s = frames_[count_].nav();
+  if (s.ba.norm() > 2.5) {
+    why = "accelerometer bias estimate too large (" + std::to_string(s.ba.norm()) + " m/s^2)";
+    return true;
+  }
+  if (s.bg.norm() > 1.0) {
+    why = "gyroscope bias estimate too large";
+    return true;
+  }
+  if (count_ > 0) {
+    const imu::NavState p = frames_[count_ - 1].nav();
+    if ((s.p_w_b - p.p_w_b).norm() > 5.0) {
+      why = "position jump between frames";
+      return true;
+    }
+    if (s.q_w_b.angularDistance(p.q_w_b) > 50.0 * M_PI / 180) {
+      why = "rotation jump between frames";
+      return true;
+    }
+  }
+  if (fm_.trackedIn(count_) < 2) {
+    why = "too few tracked landmarks";
+    return true;
+  }
+  return false;
+}
+
+void Estimator::slide(bool keyframe) {
+  if (count_ < kWindowSize) return;
+  if (keyframe || !initialized_)
+    marginalizeOldest();
+  else
+    dropSecondNewest();
+  // Keep the IMU samples still needed (from the oldest window frame on).
+  const TimeNs keep_from = frames_[0].t_ns;
+  std::size_t first = 0;
+  while (first + 1 < imu_.size() && imu_[first + 1].t_ns <= keep_from) ++first;
+  if (first > 0) imu_.erase(imu_.begin(), imu_.begin() + static_cast<std::ptrdiff_t>(first));
+}
+
+void Estimator::marginalizeOldest() {
+  if (initialized_) {
+    Marginalizer m;
+    double* pose0 = frames_[0].pose.data();
+    double* sb0 = frames_[0].sb.data();
+    if (prior_) {
+      std::vector<int> drop;
+      for (std::size_t k = 0; k < prior_->blocks.size(); ++k)
+        if (prior_->blocks[k] == pose0 || prior_->blocks[k] == sb0) drop.push_back(static_cast<int>(k));
+      // Carried into the new prior even when it does not touch frame 0.
+      m.add({std::make_shared<MarginalizationFactor>(prior_), nullptr, prior_->blocks, drop});
+    }
+    if (frames_[1].pre && frames_[1].pre->sumDt() <= 10.0)
+      m.add({std::make_shared<ImuFactor>(frames_[1].pre.get()), nullptr,
+             {pose0, sb0, frames_[1].pose.data(), frames_[1].sb.data()}, {0, 1}});
+    auto huber = std::make_shared<ceres::HuberLoss>(options_.huber_px);
+    const ProjectionWeight w{rig_.focal_px, options_.sigma_px, nullptr};
+    for (auto& [id, lm] : fm_.landmarks()) {
+      if (lm.start_frame != 0 || !lm.usable()) continue;
+      for (const auto& lf : landmarkFactors(lm, rig_, w)) {
+        if (lf.frame < 0)
+          m.add({lf.cost, huber, {&lm.inv_depth}, {0}});
+        else
+          m.add({lf.cost, huber, {pose0, frames_[lf.frame].pose.data(), &lm.inv_depth}, {0, 2}});
+      }
+    }
+    prior_ = std::make_shared<MarginalizationPrior>(m.marginalize());
+    if (prior_->blocks.empty()) prior_.reset();
+  }
+  const Isometry3d T0 = frames_[0].T_w_b(), T1 = frames_[1].T_w_b();
+  std::unordered_map<double*, double*> remap;
+  for (int i = 0; i < kWindowSize; ++i) {
+    frames_[i].t_ns = frames_[i + 1].t_ns;
+    frames_[i].pose = frames_[i + 1].pose;
+    frames_[i].sb = frames_[i + 1].sb;
+    frames_[i].pre = std::move(frames_[i + 1].pre);
+    remap[frames_[i + 1].pose.data()] = frames_[i].pose.data();
+    remap[frames_[i + 1].sb.data()] = frames_[i].sb.data();
+  }
+  frames_[0].pre.reset();
+  fm_.removeOldest(T0, T1, rig_);
+  if (prior_) prior_->remap(remap);
+  count_ = kWindowSize - 1;
+}
+
+void Estimator::dropSecondNewest() {
+  const int k = kWindowSize - 1, newest = kWindowSize;
+  if (prior_) {
+    std::vector<int> drop;
+    for (std::size_t i = 0; i < prior_->blocks.size(); ++i)
+      if (prior_->blocks[i] == frames_[k].pose.data() || prior_->blocks[i] == frames_[k].sb.data())
+        drop.push_back(static_cast<int>(i));
+    if (!drop.empty()) {
+      Marginalizer m;
+      m.add({std::make_shared<MarginalizationFactor>(prior_), nullptr, prior_->blocks, drop});
+      prior_ = std::make_shared<MarginalizationPrior>(m.marginalize());
+      if (prior_->blocks.empty()) prior_.reset();
+    }
+  }
+  // One preintegration from frame k-1 to the newest frame.
+  auto merged = integrate(frames_[k - 1].t_ns, frames_[newest].t_ns, frames_[k - 1].nav());
+  frames_[k].t_ns = frames_[newest].t_ns;
+  frames_[k].pose = frames_[newest].pose;
+  frames_[k].sb = frames_[newest].sb;
+  frames_[k].pre = merged ? std::move(merged) : std::move(frames_[newest].pre);
+  frames_[newest].pre.reset();
+  fm_.removeFrame(k);
+  if (prior_) prior_->remap({{frames_[newest].pose.data(), frames_[k].pose.data()},
+                             {frames_[newest].sb.data(), frames_[k].sb.data()}});
+  count_ = kWindowSize - 1;
+}
+
+}  // namespace idyvins::backend

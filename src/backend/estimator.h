@@ -1,0 +1,97 @@
+#pragma once
+// The sliding-window stereo-inertial estimator (VINS-Fusion class): window of 10
+// keyframes + the newest frame, stereo + IMU initialization, Ceres solve with IMU,
+// projection and marginalization factors, outlier removal, marginalization of the
+// oldest keyframe or the second newest frame, failure detection with reset.
+
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "backend/feature_manager.h"
+#include "backend/marginalization.h"
+#include "core/measurements.h"
+#include "frontend/feature_frame.h"
+#include "imu/preintegration.h"
+#include "io/config.h"
+
+namespace idyvins::backend {
+
+constexpr int kWindowSize = 10;
+
+/// Estimator tuning beyond the config.
+struct EstimatorOptions {
+  double sigma_px = 1.5;          ///< pixel noise of projection factors
+  double huber_px = 1.0;          ///< Huber threshold (on the normalized residual)
+  double outlier_px = 3.0;        ///< mean reprojection error that removes a landmark
+  double init_rotation_check_deg = 3.0;  ///< PnP vs gyro disagreement that rejects an init frame
+  int min_pnp_points = 15;
+};
+
+/// What the estimator says about one frame.
+struct FrameResult {
+  TimeNs t_ns = 0;
+  bool initialized = false;  ///< the pose below is valid
+  bool reset = false;        ///< a failure was detected at this frame (state reset)
+  std::string status;        ///< e.g. "initializing: 4/10 frames", "tracking", "reset: ..."
+  imu::NavState state;       ///< body state in the world (valid when initialized)
+  double optimization_ms = 0;
+  int landmarks = 0;         ///< landmarks used in the solve
+  bool keyframe = false;
+};
+
+/// The newest state, for the front end's motion prior (DESIGN §2: one small struct).
+struct LatestState {
+  bool valid = false;
+  TimeNs t_ns = 0;
+  imu::NavState state;
+};
+
+/// One instance per sequence; feed IMU samples and frames in time order.
+class Estimator {
+ public:
+  explicit Estimator(const Config& config, const EstimatorOptions& options = {});
+  void addImu(const ImuSample& sample);
+  FrameResult addFrame(const frontend::FeatureFrame& features);
+  LatestState latest() const;
+  const Rig& rig() const { return rig_; }
+  /// IMU samples kept since the oldest window frame (for the motion prior).
+  const std::vector<ImuSample>& imuHistory() const { return imu_; }
+
+ private:
+  struct Frame {
+    TimeNs t_ns = 0;
+    std::array<double, 7> pose{};
+    std::array<double, 9> sb{};
+    std::unique_ptr<imu::Preintegration> pre;  ///< from the previous frame to this one
+    Eigen::Isometry3d T_w_b() const;
+    imu::NavState nav() const;
+    void setNav(const imu::NavState& s);
+  };
+  void resetWindow();
+  std::unique_ptr<imu::Preintegration> integrate(TimeNs t0, TimeNs t1, const imu::NavState& from) const;
+  bool initStep(FrameResult& result);
+  bool pnp(int frame);
+  bool alignAndStart();
+  void optimize(FrameResult& result);
+  void removeOutliers();
+  bool failureDetected(std::string& why) const;
+  void slide(bool keyframe);
+  void marginalizeOldest();
+  void dropSecondNewest();
+  std::vector<Eigen::Isometry3d> windowPoses() const;
+
+  Config config_;
+  EstimatorOptions options_;
+  Rig rig_;
+  ImuNoise noise_;
+  std::vector<ImuSample> imu_;
+  std::array<Frame, kWindowSize + 1> frames_;
+  int count_ = -1;  ///< index of the newest frame in the window (-1: empty)
+  bool initialized_ = false;
+  FeatureManager fm_;
+  std::shared_ptr<MarginalizationPrior> prior_;
+  Eigen::Isometry3d last_T_w_b_ = Eigen::Isometry3d::Identity();
+};
+
+}  // namespace idyvins::backend

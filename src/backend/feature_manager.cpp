@@ -1,0 +1,165 @@
+#include "backend/feature_manager.h"
+
+#include <Eigen/SVD>
+#include <cmath>
+
+namespace idyvins::backend {
+
+using Eigen::Isometry3d;
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+namespace {
+constexpr double kMinDepth = 0.1, kMaxDepth = 80.0;
+}
+
+Isometry3d cameraPose(const Isometry3d& T_w_b, const Extrinsic& e) {
+  Isometry3d T_b_c = Isometry3d::Identity();
+  T_b_c.linear() = e.q_b_c.toRotationMatrix();
+  T_b_c.translation() = e.t_b_c;
+  return T_w_b * T_b_c;
+}
+
+Vector3d triangulateTwoViews(const Isometry3d& T_w_c0, const Vector2d& xy0, const Isometry3d& T_w_c1,
+                             const Vector2d& xy1) {
+  const Eigen::Matrix<double, 3, 4> P0 = T_w_c0.inverse().matrix().topRows<3>();
+  const Eigen::Matrix<double, 3, 4> P1 = T_w_c1.inverse().matrix().topRows<3>();
+  Eigen::Matrix4d A;
+  A.row(0) = xy0.x() * P0.row(2) - P0.row(0);
+  A.row(1) = xy0.y() * P0.row(2) - P0.row(1);
+  A.row(2) = xy1.x() * P1.row(2) - P1.row(0);
+  A.row(3) = xy1.y() * P1.row(2) - P1.row(1);
+  const Eigen::Vector4d X = Eigen::JacobiSVD<Eigen::Matrix4d>(A, Eigen::ComputeFullV).matrixV().col(3);
+  return X.head<3>() / X(3);
+}
+
+bool FeatureManager::addFrame(int frame, const frontend::FeatureFrame& ff, double keyframe_parallax_px,
+                              double focal_px) {
+  int tracked = 0, new_features = 0, long_tracks = 0;
+  for (const auto& f : ff.features) {
+    Observation o;
+    o.xy = f.xy;
+    o.uv = f.uv;
+    o.has_right = f.has_right;
+    o.xy_right = f.xy_right;
+    auto it = landmarks_.find(f.id);
+    if (it == landmarks_.end() || it->second.endFrame() != frame - 1) {
+      if (it != landmarks_.end()) landmarks_.erase(it);  // a gap: start over
+      Landmark lm;
+      lm.id = f.id;
+      lm.start_frame = frame;
+      lm.obs.push_back(o);
+      lm.label = f.label;
+      landmarks_.emplace(f.id, lm);
+      ++new_features;
+    } else {
+      it->second.obs.push_back(o);
+      if (f.label != frontend::FeatureLabel::kStatic) it->second.label = f.label;  // sticky candidate
+      ++tracked;
+      if (it->second.obs.size() >= 4) ++long_tracks;
+    }
+  }
+  if (frame < 2 || tracked < 20 || long_tracks < 40 || new_features > 0.5 * tracked) return true;
+  // Mean parallax between frames frame-2 and frame-1 of landmarks seen in both (and now).
+  double sum = 0;
+  int n = 0;
+  for (const auto& [id, lm] : landmarks_) {
+    if (lm.start_frame <= frame - 2 && lm.endFrame() >= frame - 1) {
+      const Vector2d& a = lm.obs[frame - 2 - lm.start_frame].xy;
+      const Vector2d& b = lm.obs[frame - 1 - lm.start_frame].xy;
+      sum += (a - b).norm();
+      ++n;
+    }
+  }
+  if (n == 0) return true;
+  return sum / n * focal_px >= keyframe_parallax_px;
+}
+
+void FeatureManager::triangulate(const std::vector<Isometry3d>& T_w_b, const Rig& rig) {
+  for (auto& [id, lm] : landmarks_) {
+    if (lm.inv_depth > 0) continue;
+    const Isometry3d T_w_c = cameraPose(T_w_b[lm.start_frame], rig.T_b_c0);
+    Vector3d p_w;
+    bool ok = false;
+    const Observation& o0 = lm.obs.front();
+    if (rig.stereo && o0.has_right) {
+      p_w = triangulateTwoViews(T_w_c, o0.xy, cameraPose(T_w_b[lm.start_frame], rig.T_b_c1), o0.xy_right);
+      ok = true;
+    } else if (lm.obs.size() >= 2) {
+      const int j = lm.endFrame();
+      const Isometry3d T_w_cj = cameraPose(T_w_b[j], rig.T_b_c0);
+      if ((T_w_cj.translation() - T_w_c.translation()).norm() > 0.05) {
+        p_w = triangulateTwoViews(T_w_c, o0.xy, T_w_cj, lm.obs.back().xy);
+        ok = true;
+      }
+    }
+    if (!ok) continue;
+    const double z = (T_w_c.inverse() * p_w).z();
+    if (z > kMinDepth && z < kMaxDepth) lm.inv_depth = 1.0 / z;
+  }
+}
+
+void FeatureManager::removeOldest(const Isometry3d& T_w_b0, const Isometry3d& T_w_b1, const Rig& rig) {
+  for (auto it = landmarks_.begin(); it != landmarks_.end();) {
+    Landmark& lm = it->second;
+    if (lm.start_frame != 0) {
+      --lm.start_frame;
+      ++it;
+      continue;
+    }
+    if (lm.obs.size() < 2) {
+      it = landmarks_.erase(it);
+      continue;
+    }
+    if (lm.inv_depth > 0) {
+      const Vector3d p_c0(lm.obs[0].xy.x() / lm.inv_depth, lm.obs[0].xy.y() / lm.inv_depth, 1.0 / lm.inv_depth);
+      const Vector3d p_w = cameraPose(T_w_b0, rig.T_b_c0) * p_c0;
+      const double z = (cameraPose(T_w_b1, rig.T_b_c0).inverse() * p_w).z();
+      lm.inv_depth = z > kMinDepth ? 1.0 / z : -1.0;
+    }
+    lm.obs.erase(lm.obs.begin());
+    ++it;
+  }
+}
+
+void FeatureManager::removeFrame(int frame) {
+  for (auto it = landmarks_.begin(); it != landmarks_.end();) {
+    Landmark& lm = it->second;
+    if (lm.start_frame == frame) {
+      // Anchored in the dropped frame: keep it only if the newest frame continues it.
+      if (lm.obs.size() < 2) {
+        it = landmarks_.erase(it);
+        continue;
+      }
+      lm.obs.erase(lm.obs.begin());  // the newest frame (index frame + 1) becomes index frame
+      lm.inv_depth = -1.0;           // re-triangulate in the new anchor
+    } else if (lm.start_frame < frame && lm.endFrame() >= frame) {
+      lm.obs.erase(lm.obs.begin() + (frame - lm.start_frame));
+    } else if (lm.start_frame > frame) {
+      --lm.start_frame;
+    }
+    ++it;
+  }
+}
+
+void FeatureManager::remove(const std::vector<std::uint64_t>& ids) {
+  for (auto id : ids) landmarks_.erase(id);
+}
+
+void FeatureManager::removeFailures() {
+  for (auto it = landmarks_.begin(); it != landmarks_.end();) {
+    if (it->second.inv_depth > 0 && (it->second.inv_depth < 1.0 / kMaxDepth || it->second.inv_depth > 1.0 / kMinDepth))
+      it = landmarks_.erase(it);
+    else
+      ++it;
+  }
+}
+
+int FeatureManager::trackedIn(int frame) const {
+  int n = 0;
+  for (const auto& [id, lm] : landmarks_)
+    if (lm.usable() && lm.start_frame <= frame && lm.endFrame() >= frame) ++n;
+  return n;
+}
+
+}  // namespace idyvins::backend

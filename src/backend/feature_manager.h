@@ -1,0 +1,81 @@
+#pragma once
+// Landmarks of the sliding window: observations per frame (left, right), inverse
+// depth in the anchor (first observing) frame's left camera, labels, triangulation.
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <map>
+#include <vector>
+
+#include "backend/projection_factors.h"
+#include "frontend/feature_frame.h"
+
+namespace idyvins::backend {
+
+/// One observation of a landmark in one window frame.
+struct Observation {
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();        ///< left normalized
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();        ///< left pixel
+  bool has_right = false;
+  Eigen::Vector2d xy_right = Eigen::Vector2d::Zero();  ///< right normalized
+};
+
+/// A landmark: observations in consecutive window frames start_frame, start_frame + 1, ...
+struct Landmark {
+  std::uint64_t id = 0;
+  int start_frame = 0;
+  std::vector<Observation> obs;
+  double inv_depth = -1.0;  ///< ≤ 0: not triangulated
+  frontend::FeatureLabel label = frontend::FeatureLabel::kStatic;
+  int endFrame() const { return start_frame + static_cast<int>(obs.size()) - 1; }
+  bool usable() const { return inv_depth > 0 && (obs.size() >= 2 || obs.front().has_right); }
+};
+
+/// Stereo rig extrinsics and the intrinsic scale used to weight residuals.
+struct Rig {
+  Extrinsic T_b_c0, T_b_c1;
+  bool stereo = true;
+  double focal_px = 460.0;
+};
+
+/// Owns the landmarks of the window.
+class FeatureManager {
+ public:
+  /// Adds the features of window frame `frame`; returns true if it should be a keyframe
+  /// (VINS-Fusion's rule: few tracked / many new features, or mean parallax to the
+  /// previous frames ≥ keyframe_parallax_px).
+  bool addFrame(int frame, const frontend::FeatureFrame& features, double keyframe_parallax_px, double focal_px);
+
+  /// Triangulates landmarks without depth: stereo in the anchor frame first, else two
+  /// views of the window. T_w_b holds the window's body poses.
+  void triangulate(const std::vector<Eigen::Isometry3d>& T_w_b, const Rig& rig);
+
+  /// After the oldest frame left the window: re-anchors its landmarks in the next
+  /// frame (depth transferred with the poses before the slide) and shifts the rest.
+  void removeOldest(const Eigen::Isometry3d& T_w_b0, const Eigen::Isometry3d& T_w_b1, const Rig& rig);
+  /// After the second newest frame (index `frame`) was dropped: removes its observations.
+  void removeFrame(int frame);
+  /// Drops landmarks by id (outliers, confirmed dynamic).
+  void remove(const std::vector<std::uint64_t>& ids);
+  /// Drops landmarks whose depth became invalid after a solve.
+  void removeFailures();
+  void clear() { landmarks_.clear(); }
+
+  std::map<std::uint64_t, Landmark>& landmarks() { return landmarks_; }
+  const std::map<std::uint64_t, Landmark>& landmarks() const { return landmarks_; }
+  /// Number of usable landmarks observed in `frame`.
+  int trackedIn(int frame) const;
+
+ private:
+  std::map<std::uint64_t, Landmark> landmarks_;
+};
+
+/// Linear (DLT) triangulation of a point seen at normalized xy0 by camera T_w_c0 and xy1
+/// by T_w_c1; returns the point in the world.
+Eigen::Vector3d triangulateTwoViews(const Eigen::Isometry3d& T_w_c0, const Eigen::Vector2d& xy0,
+                                    const Eigen::Isometry3d& T_w_c1, const Eigen::Vector2d& xy1);
+
+/// T_w_c of a body pose and an extrinsic.
+Eigen::Isometry3d cameraPose(const Eigen::Isometry3d& T_w_b, const Extrinsic& T_b_c);
+
+}  // namespace idyvins::backend

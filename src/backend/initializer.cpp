@@ -1,0 +1,69 @@
+#include "backend/initializer.h"
+
+#include <Eigen/Dense>
+
+#include "core/so3.h"
+
+namespace idyvins::backend {
+
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+Vector3d solveGyroBias(const std::vector<Eigen::Quaterniond>& q, const std::vector<const imu::Preintegration*>& pre) {
+  Matrix3d A = Matrix3d::Zero();
+  Vector3d b = Vector3d::Zero();
+  for (std::size_t i = 1; i < q.size(); ++i) {
+    const Eigen::Quaterniond q_ij = q[i - 1].conjugate() * q[i];
+    const Matrix3d J = pre[i]->jacobian().block<3, 3>(imu::kR, imu::kBg);
+    const Vector3d r = 2.0 * (pre[i]->deltaQ().conjugate() * q_ij).vec();
+    A += J.transpose() * J;
+    b += J.transpose() * r;
+  }
+  return A.ldlt().solve(b);
+}
+
+Alignment alignVelocityGravity(const std::vector<Eigen::Isometry3d>& T, const std::vector<const imu::Preintegration*>& pre,
+                               double g_norm) {
+  const int n = static_cast<int>(T.size());
+  const int dim = 3 * n + 3;
+  Alignment out;
+  auto solve = [&](const Vector3d* fixed_g) {
+    const int d = fixed_g ? 3 * n : dim;
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(d, d);
+    Eigen::VectorXd b = Eigen::VectorXd::Zero(d);
+    for (int j = 1; j < n; ++j) {
+      const int i = j - 1;
+      const double dt = pre[j]->sumDt();
+      const Matrix3d Ri_T = T[i].linear().transpose();
+      // Rows: α = Ri_T (pj - pi - vi dt + ½ g dt²);  β = Ri_T (vj - vi + g dt).
+      Eigen::MatrixXd H = Eigen::MatrixXd::Zero(6, d);
+      Eigen::VectorXd z(6);
+      H.block<3, 3>(0, 3 * i) = -Ri_T * dt;
+      H.block<3, 3>(3, 3 * i) = -Ri_T;
+      H.block<3, 3>(3, 3 * j) = Ri_T;
+      z.head<3>() = pre[j]->deltaP() - Ri_T * (T[j].translation() - T[i].translation());
+      z.tail<3>() = pre[j]->deltaV();
+      if (fixed_g) {
+        z.head<3>() -= Ri_T * (*fixed_g) * 0.5 * dt * dt;
+        z.tail<3>() -= Ri_T * (*fixed_g) * dt;
+      } else {
+        H.block<3, 3>(0, 3 * n) = 0.5 * Ri_T * dt * dt;
+        H.block<3, 3>(3, 3 * n) = Ri_T * dt;
+      }
+      A += H.transpose() * H;
+      b += H.transpose() * z;
+    }
+    return Eigen::VectorXd(A.ldlt().solve(b));
+  };
+  const Eigen::VectorXd x = solve(nullptr);
+  const Vector3d g = x.tail<3>();
+  out.g_norm_estimated = g.norm();
+  if (!(std::abs(g.norm() - g_norm) < 0.1 * g_norm)) return out;
+  out.g_w = g.normalized() * g_norm;
+  const Eigen::VectorXd v = solve(&out.g_w);
+  for (int i = 0; i < n; ++i) out.v_w.push_back(v.segment<3>(3 * i));
+  out.ok = v.allFinite();
+  return out;
+}
+
+}  // namespace idyvins::backend

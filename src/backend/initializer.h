@@ -1,0 +1,30 @@
+#pragma once
+// Stereo-inertial initialization helpers (pure math): gyroscope bias from visual
+// rotations, and velocity + gravity from visual poses and preintegrated IMU.
+
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "imu/preintegration.h"
+
+namespace idyvins::backend {
+
+/// Gyroscope bias correction δbg that best explains the relative rotations of
+/// consecutive poses: pre[i] integrates from frame i-1 to frame i (pre[0] unused).
+Eigen::Vector3d solveGyroBias(const std::vector<Eigen::Quaterniond>& q_w_b,
+                              const std::vector<const imu::Preintegration*>& pre);
+
+/// Result of the linear alignment.
+struct Alignment {
+  bool ok = false;
+  std::vector<Eigen::Vector3d> v_w;  ///< velocities in the visual world frame
+  Eigen::Vector3d g_w;               ///< gravity "up" vector in the visual world frame (|g| = g_norm)
+  double g_norm_estimated = 0;       ///< |g| before it was fixed
+};
+
+/// Solves velocities and gravity from visual body poses (metric, e.g. stereo) and the
+/// preintegrations (biases already corrected); checks |g| within 10 % of g_norm.
+Alignment alignVelocityGravity(const std::vector<Eigen::Isometry3d>& T_w_b,
+                               const std::vector<const imu::Preintegration*>& pre, double g_norm);
+
+}  // namespace idyvins::backend
