@@ -14,6 +14,7 @@
 #include "io/config.h"
 #include "io/data_source.h"
 #include "io/trajectory_io.h"
+#include "prefetch.h"
 #include "progress.h"
 
 namespace idyvins::app {
@@ -63,8 +64,9 @@ int runRun(const RunArgs& a) {
   double sum_track = 0, sum_opt = 0, sum_filter = 0;
   std::string last_status;
   const auto wall_start = std::chrono::steady_clock::now();
+  PrefetchSource prefetch(source, 4);
   while (count < total) {
-    auto m = source.next();
+    auto m = prefetch.next();
     if (!m) break;
     if (const auto* imu = std::get_if<ImuSample>(&*m)) {
       estimator.addImu(*imu);

@@ -1,0 +1,79 @@
+#pragma once
+// Reads a DataSource on a background thread (image decoding overlaps processing),
+// keeping at most `max_frames` stereo frames ahead. Order and content are unchanged.
+
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <mutex>
+#include <thread>
+
+#include "io/data_source.h"
+
+namespace idyvins::app {
+
+class PrefetchSource {
+ public:
+  PrefetchSource(io::DataSource& source, std::size_t max_frames) : source_(source), max_frames_(max_frames) {
+    thread_ = std::thread([this] { produce(); });
+  }
+  ~PrefetchSource() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  /// The next measurement, or nullopt at the end; rethrows the reader's error.
+  std::optional<io::Measurement> next() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    cv_.wait(lock, [this] { return !queue_.empty() || done_; });
+    if (queue_.empty()) {
+      if (error_) std::rethrow_exception(error_);
+      return std::nullopt;
+    }
+    io::Measurement m = std::move(queue_.front());
+    queue_.pop_front();
+    if (std::holds_alternative<StereoFrame>(m)) --frames_queued_;
+    cv_.notify_all();
+    return m;
+  }
+
+ private:
+  void produce() {
+    try {
+      while (true) {
+        {
+          std::unique_lock<std::mutex> lock(mutex_);
+          cv_.wait(lock, [this] { return stop_ || frames_queued_ < max_frames_; });
+          if (stop_) break;
+        }
+        auto m = source_.next();  // outside the lock: this is the slow part
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!m) break;
+        if (std::holds_alternative<StereoFrame>(*m)) ++frames_queued_;
+        queue_.push_back(std::move(*m));
+        cv_.notify_all();
+      }
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      error_ = std::current_exception();
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    done_ = true;
+    cv_.notify_all();
+  }
+
+  io::DataSource& source_;
+  std::size_t max_frames_;
+  std::deque<io::Measurement> queue_;
+  std::size_t frames_queued_ = 0;
+  bool stop_ = false, done_ = false;
+  std::exception_ptr error_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::thread thread_;
+};
+
+}  // namespace idyvins::app

@@ -1,0 +1,207 @@
+// The sliding-window estimator end to end on short rendered sequences (in memory),
+// plus its pure helpers (triangulation, alignment).
+
+#include <gtest/gtest.h>
+
+#include "backend/estimator.h"
+#include "backend/initializer.h"
+#include "eval/trajectory_metrics.h"
+#include "frontend/feature_tracker.h"
+#include "sim/simulator.h"
+
+namespace idyvins::backend {
+namespace {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+struct RunResult {
+  std::vector<StampedPose> estimate, truth;
+  int first_init_frame = -1, resets = 0, keyframes = 0, non_keyframes = 0;
+  double init_tilt_error_deg = -1, init_speed_error = -1;  ///< at the first initialized frame
+  double path = 0, ate = 0;
+};
+
+/// Renders a sequence, synthesizes its IMU, runs tracker + estimator; `hook` may
+/// replace the features of a frame (to provoke failures).
+RunResult runSequence(const sim::SimOptions& o,
+                      const std::function<void(std::size_t, frontend::FeatureFrame&)>& hook = {}) {
+  const sim::Scene scene(o);
+  std::vector<ImuSample> imu;
+  std::vector<GroundTruthState> gt;
+  sim::synthesizeImu(scene.trajectory(), o, imu, gt);
+  frontend::FeatureTracker tracker(scene.rig());
+  Estimator estimator(scene.rig());
+  RunResult out;
+  std::size_t next_imu = 0;
+  for (std::size_t k = 0; k < scene.frameCount(); ++k) {
+    const sim::SceneFrame f = scene.renderFrame(k);
+    while (next_imu < imu.size() && imu[next_imu].t_ns <= f.t_ns) estimator.addImu(imu[next_imu++]);
+    StereoFrame sf;
+    sf.t_ns = f.t_ns;
+    sf.left = f.cam[0].image;
+    sf.right = f.cam[1].image;
+    frontend::FeatureFrame ff = tracker.track(sf, frontend::MotionPrior{}, nullptr);
+    if (hook) hook(k, ff);
+    const FrameResult r = estimator.addFrame(ff);
+    if (r.reset) {
+      ++out.resets;
+      tracker.reset();
+    }
+    if (!r.initialized) continue;
+    const GroundTruthState& g = gt[k * 10];  // IMU at 200 Hz, frames at 20 Hz
+    if (out.first_init_frame < 0) {
+      out.first_init_frame = static_cast<int>(k);
+      const Vector3d up_est = r.state.q_w_b.conjugate() * Vector3d::UnitZ();
+      const Vector3d up_gt = g.q_w_b.conjugate() * Vector3d::UnitZ();
+      out.init_tilt_error_deg = std::acos(std::min(1.0, up_est.dot(up_gt))) * 180.0 / M_PI;
+      out.init_speed_error = std::abs(r.state.v_w.norm() - g.v_w.norm());
+    }
+    (r.keyframe ? out.keyframes : out.non_keyframes) += 1;
+    out.estimate.push_back({r.t_ns, r.state.p_w_b, r.state.q_w_b});
+    EXPECT_EQ(g.t_ns, f.t_ns);
+    out.truth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
+  }
+  if (out.estimate.size() > 2) {
+    out.ate = eval::computeAte(out.truth, out.estimate, eval::AlignMode::kSe3, 1000).stats.rmse;
+    out.path = eval::pathLength(out.truth);
+  }
+  return out;
+}
+
+sim::SimOptions options(const std::string& scene, double duration, bool opening = false) {
+  sim::SimOptions o;
+  o.scene.scene = scene;
+  o.scene.seed = 1;
+  o.scene.opening_vehicle = opening;
+  o.duration_s = duration;
+  return o;
+}
+
+TEST(Estimator, ShortCitySequenceEndToEnd) {
+  const RunResult r = runSequence(options("city", 6.0));
+  std::printf("city 6 s: initialized at frame %d, %zu poses, ATE %.4f m over %.1f m (%.2f%%), %d keyframes, "
+              "%d non-keyframes, %d resets\n",
+              r.first_init_frame, r.estimate.size(), r.ate, r.path, 100 * r.ate / r.path, r.keyframes,
+              r.non_keyframes, r.resets);
+  ASSERT_GE(r.first_init_frame, 0);
+  EXPECT_LE(r.first_init_frame, 60);  // within 3 s
+  EXPECT_EQ(r.resets, 0);
+  EXPECT_LT(r.ate, 0.01 * r.path);
+  EXPECT_GT(r.keyframes + r.non_keyframes, 100);
+  EXPECT_GT(r.keyframes, 10);      // oldest-frame marginalization ran
+  EXPECT_GT(r.non_keyframes, 10);  // second-newest-frame marginalization ran  // the window slid (marginalization ran) many times
+}
+
+TEST(Estimator, InitializesDespiteAVehicleCrossingCloseInFront) {
+  // A truck crosses 5-8 m ahead during the first seconds (up to ~40 % of the view).
+  // Initialization itself must stay right: gravity direction and speed at the first
+  // initialized frame. (What the truck does to the baseline afterwards is the
+  // dynamic-scene problem idy mode addresses; the ATE is printed, not asserted.)
+  const RunResult r = runSequence(options("city", 5.0, true));
+  std::printf("opening vehicle: initialized at frame %d (tilt error %.3f deg, speed error %.3f m/s), "
+              "ATE %.4f m over %.1f m, %d resets\n",
+              r.first_init_frame, r.init_tilt_error_deg, r.init_speed_error, r.ate, r.path, r.resets);
+  ASSERT_GE(r.first_init_frame, 0);
+  EXPECT_LE(r.first_init_frame, 60);
+  EXPECT_LT(r.init_tilt_error_deg, 1.0);
+  EXPECT_LT(r.init_speed_error, 0.1);
+}
+
+TEST(Estimator, ResetsOnLostTrackingAndReinitializes) {
+  // Frames 60-62 lose every feature (a blackout): the estimator must detect it, reset,
+  // and initialize again afterwards.
+  const RunResult r = runSequence(options("parking_lot", 5.0), [](std::size_t k, frontend::FeatureFrame& ff) {
+    if (k >= 40 && k <= 42) ff.features.clear();
+  });
+  std::printf("blackout: %d resets, %zu poses\n", r.resets, r.estimate.size());
+  EXPECT_GE(r.resets, 1);
+  ASSERT_FALSE(r.estimate.empty());
+  EXPECT_GT(r.estimate.back().t_ns, 1'700'000'004'500'000'000);  // tracking again near the end
+}
+
+TEST(Initializer, AlignmentRecoversGravityAndVelocityFromExactData) {
+  sim::SimOptions o = options("city", 1.0);
+  o.imu.scale = 0.0;
+  const sim::Trajectory traj("city", 2);
+  std::vector<ImuSample> imu;
+  std::vector<GroundTruthState> gt;
+  sim::synthesizeImu(traj, o, imu, gt);
+  // Visual poses in a frame rotated by R_v_w (yaw, roll, pitch unknown to the aligner).
+  const Eigen::Quaterniond R_v_w(Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()));
+  std::vector<Eigen::Isometry3d> T;
+  std::vector<std::unique_ptr<imu::Preintegration>> pre;
+  std::vector<const imu::Preintegration*> ptrs;
+  for (int i = 0; i <= 10; ++i) {
+    const GroundTruthState& g = gt[i * 10];
+    Eigen::Isometry3d Ti = Eigen::Isometry3d::Identity();
+    Ti.linear() = (R_v_w * g.q_w_b).toRotationMatrix();
+    Ti.translation() = R_v_w * g.p_w_b;
+    T.push_back(Ti);
+    pre.push_back(i == 0 ? nullptr
+                         : std::make_unique<imu::Preintegration>(imu::integrateBetween(
+                               imu, gt[(i - 1) * 10].t_ns, g.t_ns, Vector3d::Zero(), Vector3d::Zero(),
+                               ImuNoise{0.1, 0.01, 0.001, 0.0001, 9.81})));
+    ptrs.push_back(pre.back().get());
+  }
+  const Alignment a = alignVelocityGravity(T, ptrs, 9.81);
+  ASSERT_TRUE(a.ok);
+  EXPECT_NEAR(a.g_norm_estimated, 9.81, 0.01);
+  EXPECT_LT((a.g_w - R_v_w * Vector3d(0, 0, 9.81)).norm(), 0.01);
+  for (int i = 0; i <= 10; ++i) EXPECT_LT((a.v_w[i] - R_v_w * gt[i * 10].v_w).norm(), 0.005) << i;
+  // Gyro bias: a constant bias added to the samples is recovered.
+  std::vector<ImuSample> biased = imu;
+  const Vector3d bg(0.01, -0.02, 0.015);
+  for (auto& s : biased) s.gyr_b += bg;
+  std::vector<std::unique_ptr<imu::Preintegration>> pre_b;
+  std::vector<const imu::Preintegration*> ptrs_b;
+  std::vector<Eigen::Quaterniond> q;
+  for (int i = 0; i <= 10; ++i) {
+    q.push_back(gt[i * 10].q_w_b);
+    pre_b.push_back(i == 0 ? nullptr
+                           : std::make_unique<imu::Preintegration>(imu::integrateBetween(
+                                 biased, gt[(i - 1) * 10].t_ns, gt[i * 10].t_ns, Vector3d::Zero(), Vector3d::Zero(),
+                                 ImuNoise{0.1, 0.01, 0.001, 0.0001, 9.81})));
+    ptrs_b.push_back(pre_b.back().get());
+  }
+  EXPECT_LT((solveGyroBias(q, ptrs_b) - bg).norm(), 2e-4);
+}
+
+TEST(FeatureManager, TriangulationAndReanchoring) {
+  Rig rig;
+  rig.T_b_c0.q_b_c = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Vector3d::UnitY()));
+  rig.T_b_c1 = rig.T_b_c0;
+  rig.T_b_c1.t_b_c = rig.T_b_c0.q_b_c * Vector3d(0.11, 0, 0);
+  Eigen::Isometry3d T0 = Eigen::Isometry3d::Identity(), T1 = Eigen::Isometry3d::Identity();
+  T1.translation() = Vector3d(0.4, 0.1, 0.2);
+  T1.linear() = Eigen::AngleAxisd(0.1, Vector3d::UnitZ()).toRotationMatrix();
+  const Vector3d p_w(1.0, -0.5, 6.0);
+  auto observe = [&](const Eigen::Isometry3d& T_w_b, const Extrinsic& e) {
+    const Vector3d p = cameraPose(T_w_b, e).inverse() * p_w;
+    return Vector2d(p.x() / p.z(), p.y() / p.z());
+  };
+  EXPECT_LT((triangulateTwoViews(cameraPose(T0, rig.T_b_c0), observe(T0, rig.T_b_c0), cameraPose(T1, rig.T_b_c0),
+                                 observe(T1, rig.T_b_c0)) - p_w).norm(), 1e-9);
+  FeatureManager fm;
+  for (int frame = 0; frame < 2; ++frame) {
+    frontend::FeatureFrame ff;
+    frontend::Feature f;
+    f.id = 7;
+    f.xy = observe(frame ? T1 : T0, rig.T_b_c0);
+    f.has_right = true;
+    f.xy_right = observe(frame ? T1 : T0, rig.T_b_c1);
+    ff.features.push_back(f);
+    fm.addFrame(frame, ff, 10.0, 460.0);
+  }
+  fm.triangulate({T0, T1}, rig);
+  const Landmark& lm = fm.landmarks().at(7);
+  EXPECT_NEAR(1.0 / lm.inv_depth, (cameraPose(T0, rig.T_b_c0).inverse() * p_w).z(), 1e-9);
+  fm.removeOldest(T0, T1, rig);
+  const Landmark& moved = fm.landmarks().at(7);
+  EXPECT_EQ(moved.start_frame, 0);
+  EXPECT_EQ(moved.obs.size(), 1u);
+  EXPECT_NEAR(1.0 / moved.inv_depth, (cameraPose(T1, rig.T_b_c0).inverse() * p_w).z(), 1e-9);
+}
+
+}  // namespace
+}  // namespace idyvins::backend
