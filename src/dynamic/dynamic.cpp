@@ -1,0 +1,159 @@
+#include "dynamic/dynamic.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "core/so3.h"
+
+namespace idyvins::dynamic {
+
+using Eigen::Matrix3d;
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+frontend::MotionPrior cameraMotionPrior(const imu::RelativeMotion& body, const Eigen::Isometry3d& T_b_c) {
+  const Matrix3d R_bc = T_b_c.linear();
+  const Vector3d t_bc = T_b_c.translation();
+  const Matrix3d R_b = body.q_bi_bj.toRotationMatrix();
+  frontend::MotionPrior p;
+  p.valid = true;
+  p.q_prev_cur = Eigen::Quaterniond(R_bc.transpose() * R_b * R_bc).normalized();
+  p.t_prev_cur = R_bc.transpose() * (R_b * t_bc + body.p_bi_bj - t_bc);
+  p.cov_p = body.cov_p;
+  return p;
+}
+
+frontend::MotionPrior motionPrior(const imu::NavState& s, TimeNs t_prev, TimeNs t_cur, const std::vector<ImuSample>& imu,
+                                  const ImuNoise& noise, const Eigen::Isometry3d& T_b_c) {
+  if (imu.empty() || imu.front().t_ns > t_prev || imu.back().t_ns < t_cur || t_cur <= t_prev) return {};
+  const imu::Preintegration pre = imu::integrateBetween(imu, t_prev, t_cur, s.ba, s.bg, noise);
+  return cameraMotionPrior(pre.relativeMotion(s), T_b_c);
+}
+
+double credibility(const frontend::MotionPrior& p) {
+  const double t = p.t_prev_cur.norm();
+  if (t < 1e-9) return 1.0;
+  const double sigma_p = std::sqrt(std::max(0.0, p.cov_p.trace()));
+  return (1.0 + sigma_p / t) * (1.0 + sigma_p / t);
+}
+
+double epipolarErrorPx2(const Vector2d& x0, const Vector2d& x1, const Matrix3d& R, const Vector3d& t, double fx,
+                        double fy) {
+  const Matrix3d E = hat(t) * R;
+  // K⁻¹ = [[1/fx, 0, -cx/fx], [0, 1/fy, -cy/fy], [0, 0, 1]]; with p = K x, K⁻¹ p = x.
+  // [a b c] = p0ᵀ K⁻ᵀ E K⁻¹ = x0ᵀ E K⁻¹: a = (x0ᵀE)_0 / fx, b = (x0ᵀE)_1 / fy.
+  const Eigen::RowVector3d l = Vector3d(x0.x(), x0.y(), 1.0).transpose() * E;
+  const double a = l(0) / fx, b = l(1) / fy;
+  const double e = l.dot(Vector3d(x1.x(), x1.y(), 1.0));  // = [a b c] · p1
+  const double ab = a * a + b * b;
+  if (ab < 1e-18) return 0.0;
+  return e * e / ab;
+}
+
+const char* toString(StopRule rule) {
+  switch (rule) {
+    case StopRule::kThreshold: return "largest d_s <= lambda_dy";
+    case StopRule::kCvReached: return "CV <= sqrt(2)";
+    case StopRule::kCvNotLowered: return "removal would not lower CV";
+    case StopRule::kEmpty: return "too few features";
+  }
+  return "?";
+}
+
+Elimination eliminate(const std::vector<double>& d, double lambda_dy) {
+  Elimination out;
+  std::size_t n = d.size();
+  if (n < 2) return out;
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return d[a] > d[b]; });
+  double mu = std::accumulate(d.begin(), d.end(), 0.0) / static_cast<double>(n);
+  double var = 0;
+  for (double v : d) var += (v - mu) * (v - mu);
+  var /= static_cast<double>(n);
+  const auto cv = [](double m, double v) { return m > 0 ? std::sqrt(std::max(v, 0.0)) / m : 0.0; };
+  out.cv_before = cv(mu, var);
+  const double sqrt2 = std::sqrt(2.0);
+  std::size_t next = 0;
+  while (true) {
+    if (n < 2) {
+      out.stop = StopRule::kEmpty;
+      break;
+    }
+    const double dn = d[order[next]];
+    if (dn <= lambda_dy) {
+      out.stop = StopRule::kThreshold;
+      break;
+    }
+    const double c = cv(mu, var);
+    if (c <= sqrt2) {
+      out.stop = StopRule::kCvReached;
+      break;
+    }
+    const double nn = static_cast<double>(n);
+    const double mu1 = (nn * mu - dn) / (nn - 1.0);
+    const double var1 = nn * var / (nn - 1.0) - (dn - mu1) * (dn - mu1) / nn;
+    if (cv(mu1, var1) >= c) {
+      out.stop = StopRule::kCvNotLowered;
+      break;
+    }
+    out.removed.push_back(order[next]);
+    ++next;
+    --n;
+    mu = mu1;
+    var = var1;
+  }
+  out.mean_after = mu;
+  out.var_after = var;
+  out.cv_after = cv(mu, var);
+  return out;
+}
+
+void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::FilterItem>& items) {
+  std::vector<std::size_t> tracked;
+  for (std::size_t i = 0; i < items.size(); ++i)
+    if (items[i].tracked) tracked.push_back(i);
+  if (tracked.empty()) return;  // the pass over new corners
+  stats_ = FrameStats{};
+  stats_.tracked = tracked.size();
+  if (!ctx.prior || !ctx.prior->valid) return;  // no prior yet: unfiltered
+  stats_.prior_valid = true;
+  const double sigma = credibility(*ctx.prior);
+  stats_.credibility = sigma;
+  const auto& p = ctx.camera->params();
+  const bool fisheye = p.type == camera::ModelType::kKannalaBrandt;
+  const double fx = fisheye ? ctx.camera->focal() : p.fx, fy = fisheye ? ctx.camera->focal() : p.fy;
+  const Matrix3d R = ctx.prior->q_prev_cur.toRotationMatrix();
+  std::vector<double> raw(tracked.size()), ds(tracked.size());
+  for (std::size_t k = 0; k < tracked.size(); ++k) {
+    const auto& it = items[tracked[k]];
+    raw[k] = epipolarErrorPx2(it.prev_xy, it.feature->xy, R, ctx.prior->t_prev_cur, fx, fy);
+    ds[k] = raw[k] / sigma;
+    it.feature->score = ds[k];
+  }
+  stats_.d_s = ds;
+  std::vector<bool> removed(tracked.size(), false);
+  if (eliminate_) {
+    const Elimination e = eliminate(ds, lambda_dy_);
+    stats_.cv_before = e.cv_before;
+    stats_.cv_after = e.cv_after;
+    stats_.stop_rule = toString(e.stop);
+    for (std::size_t r : e.removed) {
+      removed[r] = true;
+      items[tracked[r]].remove = true;
+      items[tracked[r]].feature->label = frontend::FeatureLabel::kEliminated;
+    }
+    stats_.eliminated = e.removed.size();
+  } else {
+    const Elimination e = eliminate(ds, 1e300);  // statistics only
+    stats_.cv_before = stats_.cv_after = e.cv_before;
+  }
+  for (std::size_t k = 0; k < tracked.size(); ++k) {
+    if (removed[k] || raw[k] <= lambda_c_) continue;
+    items[tracked[k]].feature->label = frontend::FeatureLabel::kCandidate;
+    ++stats_.candidates;
+  }
+}
+
+}  // namespace idyvins::dynamic
