@@ -7,6 +7,8 @@
 #include <nlohmann/json.hpp>
 
 #include "backend/estimator.h"
+#include "dynamic/dynamic.h"
+#include "io/ply.h"
 #include "commands.h"
 #include "core/error.h"
 #include "eval/trajectory_metrics.h"
@@ -29,8 +31,18 @@ std::unique_ptr<frontend::FeatureFilter> makeFilter(Mode mode, const Config& c) 
   switch (mode) {
     case Mode::kRansac: return std::make_unique<frontend::RansacFilter>(c.tracker.f_threshold);
     case Mode::kSeg: return std::make_unique<frontend::SegFilter>();
+    case Mode::kIdy:
+    case Mode::kIdyPre: return std::make_unique<dynamic::IdyFilter>(c.dynamic.lambda_dy, c.dynamic.lambda_dy_c, true);
+    case Mode::kIdyBa: return std::make_unique<dynamic::IdyFilter>(c.dynamic.lambda_dy, c.dynamic.lambda_dy_c, false);
     default: return nullptr;
   }
+}
+
+/// d_s histogram: 1 px² bins from 0 to 20, then one overflow bin.
+std::vector<int> histogram(const std::vector<double>& d) {
+  std::vector<int> h(21, 0);
+  for (double v : d) ++h[std::min(20, static_cast<int>(v))];
+  return h;
 }
 
 int runRun(const RunArgs& a) {
@@ -38,9 +50,7 @@ int runRun(const RunArgs& a) {
   if (!a.mode.empty() && !parseMode(a.mode, config.dynamic.mode))
     throw CLI::ValidationError("--mode", "expected " + modeNames() + ", got '" + a.mode + "'");
   const Mode mode = config.dynamic.mode;
-  if (mode == Mode::kIdy || mode == Mode::kIdyPre || mode == Mode::kIdyBa)
-    throw InputError(a.config, std::string("mode '") + toString(mode) +
-                                   "' is not implemented yet (the dynamic-landmark issue); use baseline, ransac or seg");
+  const bool idy = mode == Mode::kIdy || mode == Mode::kIdyPre || mode == Mode::kIdyBa;
   if (!config.use_imu || config.num_cam != 2)
     throw InputError(a.config, "idyvins runs stereo + IMU configs only (imu: 1, num_of_cam: 2)");
   io::EurocDataset ds = io::readEurocDataset(a.dataset);
@@ -54,12 +64,16 @@ int runRun(const RunArgs& a) {
 
   frontend::FeatureTracker tracker(config);
   auto filter = makeFilter(mode, config);
-  backend::Estimator estimator(config);
+  backend::EstimatorOptions est_options;
+  est_options.candidate_weights = est_options.post_process = mode == Mode::kIdy || mode == Mode::kIdyBa;
+  backend::Estimator estimator(config, est_options);
+  auto* idy_filter = dynamic_cast<dynamic::IdyFilter*>(filter.get());
+  std::vector<io::LabelledPoint> eliminated_points;
   const std::size_t total = a.max_frames ? std::min(a.max_frames, source.frameCount()) : source.frameCount();
   ProgressBar bar(std::string("run ") + toString(mode), total, "frames");
   std::vector<StampedPose> trajectory;
   nlohmann::json frames = nlohmann::json::array(), resets = nlohmann::json::array();
-  std::size_t count = 0;
+  std::size_t count = 0, frames_without_prior = 0;
   TimeNs first_t = 0, last_t = 0, init_t = -1;
   double sum_track = 0, sum_opt = 0, sum_filter = 0;
   std::string last_status;
@@ -75,9 +89,27 @@ int runRun(const RunArgs& a) {
     const auto& frame = std::get<StereoFrame>(*m);
     if (count == 0) first_t = frame.t_ns;
     last_t = frame.t_ns;
-    const frontend::FeatureFrame ff = tracker.track(frame, frontend::MotionPrior{}, filter.get(),
+    frontend::MotionPrior prior;
+    const backend::LatestState latest = estimator.latest();
+    if (idy && latest.valid)
+      prior = dynamic::motionPrior(latest.state, latest.t_ns, frame.t_ns, estimator.imuHistory(), config.imu,
+                                   config.T_b_c[0]);
+    const frontend::FeatureFrame ff = tracker.track(frame, prior, filter.get(),
                                                     frame.left_mask.empty() ? nullptr : &frame.left_mask);
     const backend::FrameResult r = estimator.addFrame(ff);
+    if (idy && r.initialized) {  // eliminated features with a stereo match go to the dynamic map
+      Eigen::Isometry3d T_w_b = Eigen::Isometry3d::Identity();
+      T_w_b.linear() = r.state.q_w_b.toRotationMatrix();
+      T_w_b.translation() = r.state.p_w_b;
+      for (const auto& f : ff.removed) {
+        if (!f.has_right) continue;
+        const Eigen::Vector3d p_w = backend::triangulateTwoViews(
+            backend::cameraPose(T_w_b, estimator.rig().T_b_c0), f.xy, backend::cameraPose(T_w_b, estimator.rig().T_b_c1),
+            f.xy_right);
+        const double z = (backend::cameraPose(T_w_b, estimator.rig().T_b_c0).inverse() * p_w).z();
+        if (z > 0.1 && z < 80.0) eliminated_points.push_back({p_w, 1});
+      }
+    }
     ++count;
     if (r.initialized) {
       trajectory.push_back({r.t_ns, r.state.p_w_b, r.state.q_w_b});
@@ -89,7 +121,18 @@ int runRun(const RunArgs& a) {
     sum_filter += ff.filter_ms;
     sum_opt += r.optimization_ms;
     last_status = r.status;
+    nlohmann::json dyn = nullptr;
+    if (idy_filter) {
+      const auto& st = idy_filter->lastStats();
+      dyn = {{"prior", st.prior_valid},   {"credibility", st.credibility}, {"tracked", st.tracked},
+             {"eliminated", st.eliminated}, {"candidates", st.candidates},  {"cv_before", st.cv_before},
+             {"cv_after", st.cv_after},   {"stop_rule", st.stop_rule},     {"d_s_hist", histogram(st.d_s)},
+             {"candidates_in_window", r.candidates}, {"confirmed_dynamic", r.confirmed_dynamic},
+             {"cleared", r.cleared}};
+      if (!st.prior_valid) ++frames_without_prior;
+    }
     frames.push_back({{"t_ns", r.t_ns},
+                      {"dynamic", dyn},
                       {"tracking_ms", ff.tracking_ms},
                       {"filter_ms", ff.filter_ms},
                       {"optimization_ms", r.optimization_ms},
@@ -105,6 +148,15 @@ int runRun(const RunArgs& a) {
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   if (count == 0) throw InputError(a.dataset, "no stereo frames");
   const std::string out = a.out;
+  estimator.flushMap();
+  std::vector<io::LabelledPoint> static_pts, dynamic_pts = eliminated_points;
+  for (const auto& p : estimator.staticMap()) static_pts.push_back({p.p_w, 0});
+  for (const auto& p : estimator.dynamicMap()) dynamic_pts.push_back({p.p_w, 2});
+  std::vector<io::LabelledPoint> all = static_pts;
+  all.insert(all.end(), dynamic_pts.begin(), dynamic_pts.end());
+  io::writePly(out + "/map_static.ply", static_pts);
+  io::writePly(out + "/map_dynamic.ply", dynamic_pts);
+  io::writePly(out + "/map_all.ply", all);
   io::writeTum(out + "/trajectory.tum", trajectory);
   io::writeEurocCsv(out + "/trajectory.csv", trajectory);
   const double seq_s = toSeconds(last_t - first_t);
@@ -118,6 +170,9 @@ int runRun(const RunArgs& a) {
                             {"mean_optimization_ms", sum_opt / count},
                             {"poses", trajectory.size()},
                             {"initialized_at_s", init_t >= 0 ? toSeconds(init_t - first_t) : -1.0},
+                            {"frames_without_prior", frames_without_prior},
+                            {"map_static_points", static_pts.size()},
+                            {"map_dynamic_points", dynamic_pts.size()},
                             {"resets", resets}};
   double ate = -1, path = 0;
   if (has_gt && trajectory.size() > 2) {
@@ -143,7 +198,9 @@ int runRun(const RunArgs& a) {
   std::printf("mean tracking %.2f ms, filter %.3f ms, optimization %.2f ms per frame\n", sum_track / count,
               sum_filter / count, sum_opt / count);
   if (ate >= 0) std::printf("ATE RMSE (SE3) %.4f m over %.1f m (%.2f%%)\n", ate, path, 100 * ate / path);
-  std::printf("wrote %s/trajectory.tum, trajectory.csv, stats.json\n", out.c_str());
+  std::printf("map: %zu static points, %zu dynamic points\n", static_pts.size(), dynamic_pts.size());
+  std::printf("wrote %s/trajectory.tum, trajectory.csv, stats.json, map_static.ply, map_dynamic.ply, map_all.ply\n",
+              out.c_str());
   return kOk;
 }
 

@@ -3,6 +3,8 @@
 #include <ceres/ceres.h>
 
 #include <chrono>
+#include <deque>
+#include <functional>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <unordered_map>
@@ -11,6 +13,7 @@
 #include "backend/initializer.h"
 #include "backend/parameter_blocks.h"
 #include "core/so3.h"
+#include "dynamic/dynamic.h"
 
 namespace idyvins::backend {
 
@@ -41,16 +44,20 @@ struct LandmarkFactor {
   int frame;  ///< -1 for the one-frame stereo factor
 };
 
-std::vector<LandmarkFactor> landmarkFactors(const Landmark& lm, const Rig& rig, const ProjectionWeight& w) {
+std::vector<LandmarkFactor> landmarkFactors(const Landmark& lm, const Rig& rig, const ProjectionWeight& w_static,
+                                            const std::map<int, const double*>& scale_of_frame = {}) {
   std::vector<LandmarkFactor> out;
   const Observation& a = lm.obs.front();
   for (std::size_t k = 0; k < lm.obs.size(); ++k) {
     const Observation& o = lm.obs[k];
     const int frame = lm.start_frame + static_cast<int>(k);
+    ProjectionWeight w = w_static;  // stereo factors within one frame keep the static weight
+    const auto it = scale_of_frame.find(frame);
+    if (it != scale_of_frame.end()) w.info_scale = it->second;
     if (k > 0) out.push_back({std::make_shared<ProjectionTwoFrame>(a.xy, o.xy, rig.T_b_c0, rig.T_b_c0, w), frame});
     if (rig.stereo && o.has_right) {
       if (k == 0)
-        out.push_back({std::make_shared<ProjectionOneFrameTwoCam>(a.xy, o.xy_right, rig.T_b_c0, rig.T_b_c1, w), -1});
+        out.push_back({std::make_shared<ProjectionOneFrameTwoCam>(a.xy, o.xy_right, rig.T_b_c0, rig.T_b_c1, w_static), -1});
       else
         out.push_back({std::make_shared<ProjectionTwoFrame>(a.xy, o.xy_right, rig.T_b_c0, rig.T_b_c1, w), frame});
     }
@@ -81,6 +88,9 @@ Estimator::Estimator(const Config& config, const EstimatorOptions& options) : co
   rig_.stereo = config.num_cam == 2;
   if (rig_.stereo) rig_.T_b_c1 = toExtrinsic(config.T_b_c[1]);
   rig_.focal_px = 0.5 * (config.cams[0].fx + config.cams[0].fy);
+  const bool fisheye = config.cams[0].type == camera::ModelType::kKannalaBrandt;
+  rig_.fx = fisheye ? rig_.focal_px : config.cams[0].fx;
+  rig_.fy = fisheye ? rig_.focal_px : config.cams[0].fy;
   noise_ = config.imu;
 }
 
@@ -150,6 +160,7 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     fm_.triangulate(windowPoses(), rig_);
   }
   optimize(r);
+  if (options_.post_process) postProcess(r);
   removeOutliers();
   fm_.removeFailures();
   std::string why;
@@ -296,10 +307,37 @@ void Estimator::optimize(FrameResult& r) {
   }
   const ProjectionWeight w{rig_.focal_px, options_.sigma_px, nullptr};
   int used = 0;
+  // Candidate weights 1/m_j (DESIGN §4.5): one value per (landmark, frame), owned here,
+  // pointed to by the factors and refreshed by the iteration callback below.
+  struct Weight {
+    Landmark* lm;
+    int frame;
+    double info;
+  };
+  std::deque<Weight> weights;
+  const auto refresh = [&] {
+    for (auto& wt : weights) {
+      const Isometry3d T_ci = cameraPose(frames_[wt.lm->start_frame].T_w_b(), rig_.T_b_c0);
+      const Isometry3d T_cj = cameraPose(frames_[wt.frame].T_w_b(), rig_.T_b_c0);
+      const Isometry3d T_ci_cj = T_ci.inverse() * T_cj;
+      const double m = dynamic::epipolarErrorPx2(wt.lm->obs.front().xy, wt.lm->obs[wt.frame - wt.lm->start_frame].xy,
+                                                 T_ci_cj.linear(), T_ci_cj.translation(), rig_.fx, rig_.fy);
+      wt.info = 1.0 / std::max(m, 1.0);
+    }
+  };
   for (auto& [id, lm] : fm_.landmarks()) {
     if (!lm.usable()) continue;
     ++used;
-    for (const auto& lf : landmarkFactors(lm, rig_, w)) {
+    const bool candidate = options_.candidate_weights && lm.label == frontend::FeatureLabel::kCandidate;
+    r.candidates += candidate;
+    std::map<int, const double*> scale_of_frame;
+    if (candidate) {
+      for (std::size_t k = 1; k < lm.obs.size(); ++k) {
+        weights.push_back({&lm, lm.start_frame + static_cast<int>(k), 1.0});
+        scale_of_frame[weights.back().frame] = &weights.back().info;
+      }
+    }
+    for (const auto& lf : landmarkFactors(lm, rig_, w, scale_of_frame)) {
       costs.push_back(lf.cost);
       if (lf.frame < 0)
         problem.AddResidualBlock(lf.cost.get(), &huber, &lm.inv_depth);
@@ -308,7 +346,20 @@ void Estimator::optimize(FrameResult& r) {
                                  frames_[lf.frame].pose.data(), &lm.inv_depth);
     }
   }
+  refresh();
+  struct Refresh : ceres::IterationCallback {
+    std::function<void()> f;
+    ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+      f();
+      return ceres::SOLVER_CONTINUE;
+    }
+  } callback;
+  callback.f = refresh;
   ceres::Solver::Options o;
+  if (!weights.empty()) {
+    o.callbacks.push_back(&callback);
+    o.update_state_every_iteration = true;  // the callback reads the current poses
+  }
   o.linear_solver_type = ceres::DENSE_SCHUR;
   o.trust_region_strategy_type = ceres::DOGLEG;
   o.max_num_iterations = config_.solver.max_num_iterations;
@@ -322,6 +373,49 @@ void Estimator::optimize(FrameResult& r) {
   }
   r.landmarks = used;
   r.optimization_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+Vector3d Estimator::landmarkWorld(const Landmark& lm) const {
+  const Observation& a = lm.obs.front();
+  const Vector3d p_c(a.xy.x() / lm.inv_depth, a.xy.y() / lm.inv_depth, 1.0 / lm.inv_depth);
+  return cameraPose(frames_[lm.start_frame].T_w_b(), rig_.T_b_c0) * p_c;
+}
+
+void Estimator::addToStaticMap(const Landmark& lm) {
+  if (!initialized_ || !lm.usable() || lm.label != frontend::FeatureLabel::kStatic || lm.obs.size() < 3) return;
+  if (!mapped_.insert(lm.id).second) return;
+  static_map_.push_back({landmarkWorld(lm), 0, lm.id});
+}
+
+void Estimator::flushMap() {
+  if (!initialized_) return;
+  for (const auto& [id, lm] : fm_.landmarks()) addToStaticMap(lm);
+}
+
+void Estimator::postProcess(FrameResult& r) {
+  std::vector<std::uint64_t> confirmed;
+  for (auto& [id, lm] : fm_.landmarks()) {
+    if (lm.label != frontend::FeatureLabel::kCandidate || !lm.usable() || lm.obs.size() < 2) continue;
+    const Observation& a = lm.obs.front();
+    const Vector3d pts_i(a.xy.x(), a.xy.y(), 1.0);
+    const imu::NavState si = frames_[lm.start_frame].nav();
+    double sum = 0;
+    for (std::size_t k = 1; k < lm.obs.size(); ++k) {
+      const imu::NavState sj = frames_[lm.start_frame + k].nav();
+      const Vector3d p = transferPoint(pts_i, lm.inv_depth, si.p_w_b, si.q_w_b, sj.p_w_b, sj.q_w_b, rig_.T_b_c0, rig_.T_b_c0);
+      sum += (p.head<2>() / p.z() - lm.obs[k].xy).norm() * rig_.focal_px;
+    }
+    const double mean = sum / static_cast<double>(lm.obs.size() - 1);
+    if (mean > options_.outlier_px) {
+      confirmed.push_back(id);
+      if (mapped_.insert(id).second) dynamic_map_.push_back({landmarkWorld(lm), 2, id});
+    } else if (static_cast<int>(lm.obs.size()) >= options_.clear_after_observations) {
+      lm.label = frontend::FeatureLabel::kStatic;
+      ++r.cleared;
+    }
+  }
+  r.confirmed_dynamic = static_cast<int>(confirmed.size());
+  fm_.remove(confirmed);
 }
 
 void Estimator::removeOutliers() {
@@ -414,6 +508,8 @@ void Estimator::marginalizeOldest() {
     prior_ = std::make_shared<MarginalizationPrior>(m.marginalize());
     if (prior_->blocks.empty()) prior_.reset();
   }
+  for (const auto& [id, lm] : fm_.landmarks())
+    if (lm.start_frame == 0 && lm.endFrame() < count_) addToStaticMap(lm);  // leaves the window
   const Isometry3d T0 = frames_[0].T_w_b(), T1 = frames_[1].T_w_b();
   std::unordered_map<double*, double*> remap;
   for (int i = 0; i < kWindowSize; ++i) {

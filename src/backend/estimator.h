@@ -6,6 +6,7 @@
 
 #include <array>
 #include <memory>
+#include <set>
 #include <vector>
 
 #include "backend/feature_manager.h"
@@ -26,6 +27,19 @@ struct EstimatorOptions {
   double outlier_px = 3.0;        ///< mean reprojection error that removes a landmark
   double init_rotation_check_deg = 3.0;  ///< PnP vs gyro disagreement that rejects an init frame
   int min_pnp_points = 15;
+  /// DESIGN §4.5: candidate observations weighted by 1/m_j, recomputed every solver
+  /// iteration from the current poses (modes idy, idy-ba).
+  bool candidate_weights = false;
+  /// DESIGN §4.6: confirm candidates as dynamic (leave the window) or clear them to static.
+  bool post_process = false;
+  int clear_after_observations = 4;  ///< a candidate that passes with this many observations becomes static
+};
+
+/// A map point with its label: 0 static, 1 eliminated in the front end, 2 confirmed dynamic.
+struct MapPoint {
+  Eigen::Vector3d p_w;
+  int label = 0;
+  std::uint64_t id = 0;
 };
 
 /// What the estimator says about one frame.
@@ -37,6 +51,9 @@ struct FrameResult {
   imu::NavState state;       ///< body state in the world (valid when initialized)
   double optimization_ms = 0;
   int landmarks = 0;         ///< landmarks used in the solve
+  int candidates = 0;        ///< candidate landmarks in the solve
+  int confirmed_dynamic = 0; ///< candidates confirmed dynamic after this solve
+  int cleared = 0;           ///< candidates cleared to static after this solve
   bool keyframe = false;
 };
 
@@ -57,6 +74,11 @@ class Estimator {
   const Rig& rig() const { return rig_; }
   /// IMU samples kept since the oldest window frame (for the motion prior).
   const std::vector<ImuSample>& imuHistory() const { return imu_; }
+  /// Static landmarks that left the window, and confirmed-dynamic ones (DESIGN §4.7).
+  const std::vector<MapPoint>& staticMap() const { return static_map_; }
+  const std::vector<MapPoint>& dynamicMap() const { return dynamic_map_; }
+  /// Moves the static landmarks still in the window into the static map (end of a run).
+  void flushMap();
 
  private:
   struct Frame {
@@ -75,6 +97,9 @@ class Estimator {
   bool alignAndStart();
   void optimize(FrameResult& result);
   void removeOutliers();
+  void postProcess(FrameResult& result);
+  Eigen::Vector3d landmarkWorld(const Landmark& lm) const;
+  void addToStaticMap(const Landmark& lm);
   bool failureDetected(std::string& why) const;
   void slide(bool keyframe);
   void marginalizeOldest();
@@ -92,6 +117,8 @@ class Estimator {
   FeatureManager fm_;
   std::shared_ptr<MarginalizationPrior> prior_;
   Eigen::Isometry3d last_T_w_b_ = Eigen::Isometry3d::Identity();
+  std::vector<MapPoint> static_map_, dynamic_map_;
+  std::set<std::uint64_t> mapped_;
 };
 
 }  // namespace idyvins::backend

@@ -36,6 +36,7 @@ struct Rig {
   Extrinsic T_b_c0, T_b_c1;
   bool stereo = true;
   double focal_px = 460.0;
+  double fx = 460.0, fy = 460.0;  ///< left camera, for pixel-unit errors
 };
 
 /// Owns the landmarks of the window.

@@ -226,6 +226,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
     }
   }
   matchRight(pyr, frame.right, out.features);
+  matchRight(pyr, frame.right, out.removed);  // removed features may go to the dynamic map
 
   std::swap(prev_pyr_, cur_pyr_);  // keep both pyramids' buffers for the next frame
   prev_tracks_ = std::move(final_tracks);

@@ -1,0 +1,20 @@
+#pragma once
+// PLY point clouds (ASCII): x y z, label, and an RGB color per point.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace idyvins::io {
+
+/// One labelled point: label 0 static, 1 eliminated-dynamic, 2 confirmed-dynamic.
+struct LabelledPoint {
+  Eigen::Vector3d p;
+  int label = 0;
+};
+
+/// Writes an ASCII PLY with properties x y z label red green blue (static gray,
+/// eliminated red, confirmed dynamic orange). Throws InputError if unwritable.
+void writePly(const std::string& path, const std::vector<LabelledPoint>& points);
+
+}  // namespace idyvins::io
