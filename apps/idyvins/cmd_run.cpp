@@ -4,7 +4,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <algorithm>
 #include <nlohmann/json.hpp>
+#include <unordered_map>
+#include <unordered_set>
 
 #include "backend/estimator.h"
 #include "dynamic/dynamic.h"
@@ -57,7 +60,10 @@ int runRun(const RunArgs& a) {
   const bool has_gt = ds.has_groundtruth;
   std::vector<StampedPose> gt;
   for (const auto& g : ds.groundtruth) gt.push_back({g.t_ns, g.p_w_b, g.q_w_b});
-  io::EurocSource source(std::move(ds), config.image_width, config.image_height, mode == Mode::kSeg);
+  const bool has_masks = !ds.cam0.empty() &&
+                         std::filesystem::is_directory(std::filesystem::path(ds.root) / "cam0" / "mask");
+  if (mode == Mode::kSeg && !has_masks) throw InputError(ds.root, "mode seg needs mav0/cam0/mask/ (ground-truth masks)");
+  io::EurocSource source(std::move(ds), config.image_width, config.image_height, has_masks);
   std::error_code ec;
   std::filesystem::create_directories(a.out, ec);
   if (ec) throw InputError(a.out, "cannot create output folder: " + ec.message());
@@ -74,6 +80,12 @@ int runRun(const RunArgs& a) {
   std::vector<StampedPose> trajectory;
   nlohmann::json frames = nlohmann::json::array(), resets = nlohmann::json::array();
   std::size_t count = 0, frames_without_prior = 0;
+  struct ObsRecord {
+    std::uint64_t id;
+    bool on_moving, eliminated;
+  };
+  std::vector<ObsRecord> observations;
+  std::unordered_map<std::uint64_t, bool> gt_moving_ids;  // a landmark ever observed on a moving object
   TimeNs first_t = 0, last_t = 0, init_t = -1;
   double sum_track = 0, sum_opt = 0, sum_filter = 0;
   std::string last_status;
@@ -95,7 +107,19 @@ int runRun(const RunArgs& a) {
       prior = dynamic::motionPrior(latest.state, latest.t_ns, frame.t_ns, estimator.imuHistory(), config.imu,
                                    config.T_b_c[0]);
     const frontend::FeatureFrame ff = tracker.track(frame, prior, filter.get(),
-                                                    frame.left_mask.empty() ? nullptr : &frame.left_mask);
+                                                    mode == Mode::kSeg ? &frame.left_mask : nullptr);
+    // Evaluation against the ground-truth masks (simulated datasets): every tracked
+    // observation, and whether the front end eliminated it.
+    if (has_masks) {
+      auto on_moving = [&](const frontend::Feature& f) {
+        const int u = static_cast<int>(std::lround(f.uv.x())), v = static_cast<int>(std::lround(f.uv.y()));
+        return frame.left_mask.at<std::uint8_t>(std::clamp(v, 0, frame.left_mask.rows - 1),
+                                                std::clamp(u, 0, frame.left_mask.cols - 1)) != 0;
+      };
+      for (const auto& f : ff.features) observations.push_back({f.id, on_moving(f), false});
+      for (const auto& f : ff.removed) observations.push_back({f.id, on_moving(f), true});
+      for (const auto& f : ff.features) gt_moving_ids[f.id] = gt_moving_ids[f.id] || on_moving(f);
+    }
     const backend::FrameResult r = estimator.addFrame(ff);
     if (idy && r.initialized) {  // eliminated features with a stereo match go to the dynamic map
       Eigen::Isometry3d T_w_b = Eigen::Isometry3d::Identity();
@@ -152,6 +176,30 @@ int runRun(const RunArgs& a) {
   std::vector<io::LabelledPoint> static_pts, dynamic_pts = eliminated_points;
   for (const auto& p : estimator.staticMap()) static_pts.push_back({p.p_w, 0});
   for (const auto& p : estimator.dynamicMap()) dynamic_pts.push_back({p.p_w, 2});
+  nlohmann::json classification = nullptr;
+  if (has_masks) {
+    std::unordered_set<std::uint64_t> confirmed;
+    for (const auto& p : estimator.dynamicMap()) confirmed.insert(p.id);
+    std::size_t tp = 0, fp = 0, fn = 0, tn = 0;
+    for (const auto& o : observations) {
+      const bool predicted = o.eliminated || confirmed.count(o.id);
+      (o.on_moving ? (predicted ? tp : fn) : (predicted ? fp : tn)) += 1;
+    }
+    std::size_t static_on_moving = 0;
+    for (const auto& p : estimator.staticMap()) static_on_moving += gt_moving_ids.count(p.id) && gt_moving_ids[p.id];
+    const double precision = tp + fp ? static_cast<double>(tp) / (tp + fp) : 0.0;
+    const double recall = tp + fn ? static_cast<double>(tp) / (tp + fn) : 0.0;
+    classification = {{"observations_on_moving", tp + fn},
+                       {"observations_static", fp + tn},
+                       {"moving_detected_fraction", recall},
+                       {"static_flagged_fraction", fp + tn ? static_cast<double>(fp) / (fp + tn) : 0.0},
+                       {"precision", precision},
+                       {"recall", recall},
+                       {"f1", precision + recall > 0 ? 2 * precision * recall / (precision + recall) : 0.0},
+                       {"static_map_points_on_moving", static_on_moving},
+                       {"static_map_fraction_on_moving",
+                        static_pts.empty() ? 0.0 : static_cast<double>(static_on_moving) / static_pts.size()}};
+  }
   std::vector<io::LabelledPoint> all = static_pts;
   all.insert(all.end(), dynamic_pts.begin(), dynamic_pts.end());
   io::writePly(out + "/map_static.ply", static_pts);
@@ -173,6 +221,7 @@ int runRun(const RunArgs& a) {
                             {"frames_without_prior", frames_without_prior},
                             {"map_static_points", static_pts.size()},
                             {"map_dynamic_points", dynamic_pts.size()},
+                            {"classification", classification},
                             {"resets", resets}};
   double ate = -1, path = 0;
   if (has_gt && trajectory.size() > 2) {
@@ -199,6 +248,12 @@ int runRun(const RunArgs& a) {
               sum_filter / count, sum_opt / count);
   if (ate >= 0) std::printf("ATE RMSE (SE3) %.4f m over %.1f m (%.2f%%)\n", ate, path, 100 * ate / path);
   std::printf("map: %zu static points, %zu dynamic points\n", static_pts.size(), dynamic_pts.size());
+  if (has_masks)
+    std::printf("vs ground-truth masks: %.1f%% of observations on moving objects flagged dynamic, %.2f%% of static ones; "
+                "%.2f%% of the static map on moving objects\n",
+                100 * classification["moving_detected_fraction"].get<double>(),
+                100 * classification["static_flagged_fraction"].get<double>(),
+                100 * classification["static_map_fraction_on_moving"].get<double>());
   std::printf("wrote %s/trajectory.tum, trajectory.csv, stats.json, map_static.ply, map_dynamic.ply, map_all.ply\n",
               out.c_str());
   return kOk;
