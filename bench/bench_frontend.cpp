@@ -3,8 +3,6 @@
 
 #include <benchmark/benchmark.h>
 
-#include "core/allocator.h"
-
 #include <algorithm>
 #include <map>
 #include <opencv2/core/utility.hpp>
@@ -69,12 +67,3 @@ BENCHMARK(BM_TrackerCityHigh)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_TrackerParkingLotHigh)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
-
-int main(int argc, char** argv) {
-  idyvins::configureAllocatorForStreaming();  // as the idyvins program does
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}

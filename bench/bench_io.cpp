@@ -2,8 +2,6 @@
 
 #include <benchmark/benchmark.h>
 
-#include "core/allocator.h"
-
 #include "io/data_source.h"
 #include "io/euroc_dataset.h"
 
@@ -33,12 +31,3 @@ void BM_StreamStereoFrames(benchmark::State& state) {
 BENCHMARK(BM_StreamStereoFrames)->Unit(benchmark::kMillisecond);
 
 }  // namespace
-
-int main(int argc, char** argv) {
-  idyvins::configureAllocatorForStreaming();  // as the idyvins program does
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}

@@ -3,8 +3,6 @@
 
 #include <benchmark/benchmark.h>
 
-#include "core/allocator.h"
-
 #include <random>
 
 #include "backend/imu_factor.h"
@@ -163,12 +161,3 @@ void BM_PinholeRadtanProjectWithJacobian(benchmark::State& state) {
 BENCHMARK(BM_PinholeRadtanProjectWithJacobian);
 
 }  // namespace
-
-int main(int argc, char** argv) {
-  idyvins::configureAllocatorForStreaming();  // as the idyvins program does
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}
