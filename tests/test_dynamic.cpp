@@ -166,6 +166,13 @@ TEST(Elimination, StaticNoisyTracksHaveCvNearSqrt2AndAreKept) {
   EXPECT_LE(removed, total / 50);
 }
 
+TEST(CandidateWeight, InformationIsOneOverMFlooredAtOnePixel) {
+  EXPECT_DOUBLE_EQ(candidateInformation(4.0), 0.25);   // residual scaled by 1/2
+  EXPECT_DOUBLE_EQ(candidateInformation(25.0), 0.04);
+  EXPECT_DOUBLE_EQ(candidateInformation(0.3), 1.0);    // floor: never above the static weight
+  EXPECT_DOUBLE_EQ(candidateInformation(0.0), 1.0);
+}
+
 TEST(IdyFilter, EliminatesMovingAndMarksBorderlineFeatures) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

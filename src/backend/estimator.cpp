@@ -322,7 +322,7 @@ void Estimator::optimize(FrameResult& r) {
       const Isometry3d T_ci_cj = T_ci.inverse() * T_cj;
       const double m = dynamic::epipolarErrorPx2(wt.lm->obs.front().xy, wt.lm->obs[wt.frame - wt.lm->start_frame].xy,
                                                  T_ci_cj.linear(), T_ci_cj.translation(), rig_.fx, rig_.fy);
-      wt.info = 1.0 / std::max(m, 1.0);
+      wt.info = dynamic::candidateInformation(m);
     }
   };
   for (auto& [id, lm] : fm_.landmarks()) {

@@ -4,6 +4,7 @@
 // Pure math plus one front-end filter (IdyFilter).
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,10 @@ double credibility(const frontend::MotionPrior& prior);
 /// are undistorted normalized coordinates; fx, fy scale them to pixels. 0 if degenerate.
 double epipolarErrorPx2(const Eigen::Vector2d& x0, const Eigen::Vector2d& x1, const Eigen::Matrix3d& R_prev_cur,
                         const Eigen::Vector3d& t_prev_cur, double fx, double fy);
+
+/// Information scale of a candidate observation (DESIGN §4.5): 1 / m_j with m_j
+/// (px², minimum projection error to the first window observation) floored at 1 px².
+inline double candidateInformation(double m_px2) { return 1.0 / std::max(m_px2, 1.0); }
 
 /// Why the elimination loop stopped (eq. 4).
 enum class StopRule { kThreshold, kCvReached, kCvNotLowered, kEmpty };
