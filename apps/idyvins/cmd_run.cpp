@@ -87,7 +87,7 @@ int runRun(const RunArgs& a) {
   std::vector<ObsRecord> observations;
   std::unordered_map<std::uint64_t, bool> gt_moving_ids;  // a landmark ever observed on a moving object
   TimeNs first_t = 0, last_t = 0, init_t = -1;
-  double sum_track = 0, sum_opt = 0, sum_filter = 0;
+  double sum_track = 0, sum_opt = 0, sum_filter = 0, sum_marg = 0;
   std::string last_status;
   const auto wall_start = std::chrono::steady_clock::now();
   PrefetchSource prefetch(source, 4);
@@ -144,6 +144,7 @@ int runRun(const RunArgs& a) {
     sum_track += ff.tracking_ms;
     sum_filter += ff.filter_ms;
     sum_opt += r.optimization_ms;
+    sum_marg += r.marginalization_ms;
     last_status = r.status;
     nlohmann::json dyn = nullptr;
     if (idy_filter) {
@@ -160,6 +161,7 @@ int runRun(const RunArgs& a) {
                       {"tracking_ms", ff.tracking_ms},
                       {"filter_ms", ff.filter_ms},
                       {"optimization_ms", r.optimization_ms},
+                      {"marginalization_ms", r.marginalization_ms},
                       {"features", ff.features.size()},
                       {"removed", ff.removed.size()},
                       {"landmarks", r.landmarks},
@@ -216,6 +218,7 @@ int runRun(const RunArgs& a) {
                             {"mean_tracking_ms", sum_track / count},
                             {"mean_filter_ms", sum_filter / count},
                             {"mean_optimization_ms", sum_opt / count},
+                            {"mean_marginalization_ms", sum_marg / count},
                             {"poses", trajectory.size()},
                             {"initialized_at_s", init_t >= 0 ? toSeconds(init_t - first_t) : -1.0},
                             {"frames_without_prior", frames_without_prior},
@@ -244,8 +247,8 @@ int runRun(const RunArgs& a) {
                 resets.size());
   else
     std::printf("not initialized: %s\n", last_status.c_str());
-  std::printf("mean tracking %.2f ms, filter %.3f ms, optimization %.2f ms per frame\n", sum_track / count,
-              sum_filter / count, sum_opt / count);
+  std::printf("mean tracking %.2f ms, filter %.3f ms, optimization %.2f ms, marginalization %.2f ms per frame\n",
+              sum_track / count, sum_filter / count, sum_opt / count, sum_marg / count);
   if (ate >= 0) std::printf("ATE RMSE (SE3) %.4f m over %.1f m (%.2f%%)\n", ate, path, 100 * ate / path);
   std::printf("map: %zu static points, %zu dynamic points\n", static_pts.size(), dynamic_pts.size());
   if (has_masks)

@@ -174,7 +174,10 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
   if (r.status.empty()) r.status = "tracking";
   r.state = frames_[count_].nav();
   last_T_w_b_ = frames_[count_].T_w_b();
+  const auto slide_start = std::chrono::steady_clock::now();
   slide(r.keyframe);
+  r.marginalization_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - slide_start).count();
   return r;
 }
 

@@ -50,6 +50,7 @@ struct FrameResult {
   std::string status;        ///< e.g. "initializing: 4/10 frames", "tracking", "reset: ..."
   imu::NavState state;       ///< body state in the world (valid when initialized)
   double optimization_ms = 0;
+  double marginalization_ms = 0;  ///< sliding the window (marginalization or frame drop)
   int landmarks = 0;         ///< landmarks used in the solve
   int candidates = 0;        ///< candidate landmarks in the solve
   int confirmed_dynamic = 0; ///< candidates confirmed dynamic after this solve

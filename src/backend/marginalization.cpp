@@ -1,5 +1,6 @@
 #include "backend/marginalization.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <map>
@@ -110,15 +111,16 @@ MarginalizationPrior Marginalizer::marginalize(double eps) const {
       }
     }
   }
-  // Schur complement of the dropped part (pseudo-inverse through eigenvalues).
-  const Eigen::MatrixXd Hmm = 0.5 * (H.topLeftCorner(m, m) + H.topLeftCorner(m, m).transpose());
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Hmm);
-  const Eigen::VectorXd inv_vals =
-      (es.eigenvalues().array() > eps).select(es.eigenvalues().array().inverse(), 0.0);
-  const Eigen::MatrixXd Hmm_inv = es.eigenvectors() * inv_vals.asDiagonal() * es.eigenvectors().transpose();
+  // Schur complement of the dropped part. Hmm is solved by LDLT with a tiny diagonal
+  // regularization (eps) instead of a full eigendecomposition: same result for the
+  // well-conditioned blocks, several times faster for the 50-150 dropped dimensions.
+  Eigen::MatrixXd Hmm = 0.5 * (H.topLeftCorner(m, m) + H.topLeftCorner(m, m).transpose());
+  Hmm.diagonal().array() += eps;
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(Hmm);
   const Eigen::MatrixXd Hrm = H.block(m, 0, n, m);
-  Eigen::MatrixXd A = H.bottomRightCorner(n, n) - Hrm * Hmm_inv * Hrm.transpose();
-  const Eigen::VectorXd b = g.tail(n) - Hrm * Hmm_inv * g.head(m);
+  const Eigen::MatrixXd X = ldlt.solve(Hrm.transpose());  // Hmm⁻¹ Hmr
+  Eigen::MatrixXd A = H.bottomRightCorner(n, n) - Hrm * X;
+  const Eigen::VectorXd b = g.tail(n) - X.transpose() * g.head(m);
   A = 0.5 * (A + A.transpose());
 
   // A = J0ᵀ J0 and b = J0ᵀ r0.
