@@ -38,7 +38,7 @@ TEST(Cli, HelpForEverySubcommand) {
   const Result top = run("--help");
   EXPECT_EQ(top.code, 0);
   EXPECT_NE(top.out.find("info"), std::string::npos);
-  for (const char* sub : {"info", "simulate", "eval", "track"}) {
+  for (const char* sub : {"info", "simulate", "eval", "track", "run", "bench"}) {
     const Result r = run(std::string(sub) + " --help");
     EXPECT_EQ(r.code, 0) << sub;
     EXPECT_NE(r.out.find("Usage"), std::string::npos) << r.out;

@@ -151,7 +151,7 @@ int runRun(const RunArgs& a) {
       const auto& st = idy_filter->lastStats();
       dyn = {{"prior", st.prior_valid},   {"credibility", st.credibility}, {"tracked", st.tracked},
              {"eliminated", st.eliminated}, {"candidates", st.candidates},  {"cv_before", st.cv_before},
-             {"cv_after", st.cv_after},   {"stop_rule", st.stop_rule},     {"d_s_hist", histogram(st.d_s)},
+             {"cv_after", st.cv_after},   {"stop_rule", st.stop_rule},     {"d_s_hist", histogram(st.d_s)}, {"d_s_hist_kept", histogram(st.d_s_kept)},
              {"candidates_in_window", r.candidates}, {"confirmed_dynamic", r.confirmed_dynamic},
              {"cleared", r.cleared}};
       if (!st.prior_valid) ++frames_without_prior;

@@ -149,6 +149,8 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
     const Elimination e = eliminate(ds, 1e300);  // statistics only
     stats_.cv_before = stats_.cv_after = e.cv_before;
   }
+  for (std::size_t k = 0; k < tracked.size(); ++k)
+    if (!removed[k]) stats_.d_s_kept.push_back(ds[k]);
   for (std::size_t k = 0; k < tracked.size(); ++k) {
     if (removed[k] || raw[k] <= lambda_c_) continue;
     items[tracked[k]].feature->label = frontend::FeatureLabel::kCandidate;

@@ -61,7 +61,8 @@ struct FrameStats {
   std::size_t tracked = 0, eliminated = 0, candidates = 0;
   double cv_before = 0, cv_after = 0;
   std::string stop_rule;
-  std::vector<double> d_s;  ///< per tracked feature (px²)
+  std::vector<double> d_s;       ///< per tracked feature (px²), before elimination
+  std::vector<double> d_s_kept;  ///< the ones left after elimination
 };
 
 /// The `idy` front-end filter: d_s per tracked feature from the motion prior,
