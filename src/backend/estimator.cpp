@@ -395,21 +395,24 @@ void Estimator::flushMap() {
   for (const auto& [id, lm] : fm_.landmarks()) addToStaticMap(lm);
 }
 
+double Estimator::meanReprojectionErrorPx(const Landmark& lm) const {
+  const Observation& a = lm.obs.front();
+  const Vector3d pts_i(a.xy.x(), a.xy.y(), 1.0);
+  const imu::NavState si = frames_[lm.start_frame].nav();
+  double sum = 0;
+  for (std::size_t k = 1; k < lm.obs.size(); ++k) {
+    const imu::NavState sj = frames_[lm.start_frame + k].nav();
+    const Vector3d p = transferPoint(pts_i, lm.inv_depth, si.p_w_b, si.q_w_b, sj.p_w_b, sj.q_w_b, rig_.T_b_c0, rig_.T_b_c0);
+    sum += (p.head<2>() / p.z() - lm.obs[k].xy).norm() * rig_.focal_px;
+  }
+  return lm.obs.size() > 1 ? sum / static_cast<double>(lm.obs.size() - 1) : 0.0;
+}
+
 void Estimator::postProcess(FrameResult& r) {
   std::vector<std::uint64_t> confirmed;
   for (auto& [id, lm] : fm_.landmarks()) {
     if (lm.label != frontend::FeatureLabel::kCandidate || !lm.usable() || lm.obs.size() < 2) continue;
-    const Observation& a = lm.obs.front();
-    const Vector3d pts_i(a.xy.x(), a.xy.y(), 1.0);
-    const imu::NavState si = frames_[lm.start_frame].nav();
-    double sum = 0;
-    for (std::size_t k = 1; k < lm.obs.size(); ++k) {
-      const imu::NavState sj = frames_[lm.start_frame + k].nav();
-      const Vector3d p = transferPoint(pts_i, lm.inv_depth, si.p_w_b, si.q_w_b, sj.p_w_b, sj.q_w_b, rig_.T_b_c0, rig_.T_b_c0);
-      sum += (p.head<2>() / p.z() - lm.obs[k].xy).norm() * rig_.focal_px;
-    }
-    const double mean = sum / static_cast<double>(lm.obs.size() - 1);
-    if (mean > options_.outlier_px) {
+    if (meanReprojectionErrorPx(lm) > options_.outlier_px) {
       confirmed.push_back(id);
       if (mapped_.insert(id).second) dynamic_map_.push_back({landmarkWorld(lm), 2, id});
     } else if (static_cast<int>(lm.obs.size()) >= options_.clear_after_observations) {
@@ -423,21 +426,8 @@ void Estimator::postProcess(FrameResult& r) {
 
 void Estimator::removeOutliers() {
   std::vector<std::uint64_t> bad;
-  for (const auto& [id, lm] : fm_.landmarks()) {
-    if (!lm.usable()) continue;
-    const Observation& a = lm.obs.front();
-    const Vector3d pts_i(a.xy.x(), a.xy.y(), 1.0);
-    const imu::NavState si = frames_[lm.start_frame].nav();
-    double sum = 0;
-    int n = 0;
-    for (std::size_t k = 1; k < lm.obs.size(); ++k) {
-      const imu::NavState sj = frames_[lm.start_frame + k].nav();
-      const Vector3d p = transferPoint(pts_i, lm.inv_depth, si.p_w_b, si.q_w_b, sj.p_w_b, sj.q_w_b, rig_.T_b_c0, rig_.T_b_c0);
-      sum += (p.head<2>() / p.z() - lm.obs[k].xy).norm() * rig_.focal_px;
-      ++n;
-    }
-    if (n > 0 && sum / n > options_.outlier_px) bad.push_back(id);
-  }
+  for (const auto& [id, lm] : fm_.landmarks())
+    if (lm.usable() && lm.obs.size() > 1 && meanReprojectionErrorPx(lm) > options_.outlier_px) bad.push_back(id);
   fm_.remove(bad);
 }
 

@@ -99,6 +99,8 @@ class Estimator {
   void optimize(FrameResult& result);
   void removeOutliers();
   void postProcess(FrameResult& result);
+  /// Mean left-camera reprojection error (px) of a landmark from its anchor into its other observations.
+  double meanReprojectionErrorPx(const Landmark& lm) const;
   Eigen::Vector3d landmarkWorld(const Landmark& lm) const;
   void addToStaticMap(const Landmark& lm);
   bool failureDetected(std::string& why) const;
