@@ -56,14 +56,6 @@ ceres::Solver::Options tightOptions() {
   return o;
 }
 
-ceres::Problem::Options borrowing() {
-  ceres::Problem::Options o;
-  o.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  o.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  o.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  return o;
-}
-
 TEST(Marginalization, LinearChainIsExactFromAnyLinearizationPoint) {
   std::mt19937 rng(3);
   std::normal_distribution<double> g(0.0, 1.0);
@@ -86,7 +78,7 @@ TEST(Marginalization, LinearChainIsExactFromAnyLinearizationPoint) {
   for (auto& v : init) v = 5.0 * r3();
 
   x = init;
-  ceres::Problem full(borrowing());
+  ceres::Problem full(borrowingProblemOptions());
   for (auto& f : factors) {
     std::vector<double*> b;
     for (int v : f.vars) b.push_back(x[v].data());
@@ -111,7 +103,7 @@ TEST(Marginalization, LinearChainIsExactFromAnyLinearizationPoint) {
   auto prior = std::make_shared<MarginalizationPrior>(marg.marginalize());
   ASSERT_EQ(prior->blocks.size(), 2u);  // x1 and x4
   MarginalizationFactor prior_factor(prior);
-  ceres::Problem reduced(borrowing());
+  ceres::Problem reduced(borrowingProblemOptions());
   reduced.AddResidualBlock(&prior_factor, nullptr, prior->blocks);
   for (auto& f : factors) {
     if (std::find(f.vars.begin(), f.vars.end(), 0) != f.vars.end()) continue;
@@ -228,7 +220,7 @@ void addLandmark(ceres::Problem& problem, Window& w, Window::Landmark& lm) {
 TEST(Marginalization, VisualInertialWindowReSolvesToTheFullEstimate) {
   Window w;
   buildWindow(w);
-  ceres::Problem full(borrowing());
+  ceres::Problem full(borrowingProblemOptions());
   addStates(full, w, 0);
   full.AddResidualBlock(w.pose0_prior.get(), nullptr, w.pose[0].data());
   for (int i = 0; i + 1 < Window::kFrames; ++i)
@@ -269,7 +261,7 @@ TEST(Marginalization, VisualInertialWindowReSolvesToTheFullEstimate) {
   }
   for (auto& lm : w.landmarks) lm.inv_depth *= 1.02;
   MarginalizationFactor prior_factor(prior);
-  ceres::Problem reduced(borrowing());
+  ceres::Problem reduced(borrowingProblemOptions());
   addStates(reduced, w, 1);
   reduced.AddResidualBlock(&prior_factor, nullptr, prior->blocks);
   for (int i = 1; i + 1 < Window::kFrames; ++i)

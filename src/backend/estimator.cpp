@@ -30,14 +30,6 @@ Extrinsic toExtrinsic(const Isometry3d& T) {
   return e;
 }
 
-ceres::Problem::Options borrowing() {
-  ceres::Problem::Options o;
-  o.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  o.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  o.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  return o;
-}
-
 /// The projection factors of one landmark: (cost, block list, whether the pose blocks are involved).
 struct LandmarkFactor {
   std::shared_ptr<ceres::CostFunction> cost;
@@ -291,7 +283,7 @@ bool Estimator::alignAndStart() {
 
 void Estimator::optimize(FrameResult& r) {
   const auto start = std::chrono::steady_clock::now();
-  ceres::Problem problem(borrowing());
+  ceres::Problem problem(borrowingProblemOptions());
   std::vector<std::shared_ptr<ceres::CostFunction>> costs;
   ceres::HuberLoss huber(options_.huber_px);
   for (int i = 0; i <= count_; ++i) {

@@ -15,6 +15,14 @@ void posePlus(const double* x, const double* delta, double* x_plus_delta) {
   q_out = (q * expQuat(dq)).normalized();
 }
 
+ceres::Problem::Options borrowingProblemOptions() {
+  ceres::Problem::Options o;
+  o.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  o.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  o.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  return o;
+}
+
 void setPose(const Eigen::Vector3d& p, const Eigen::Quaterniond& q, double* block) {
   Eigen::Map<Eigen::Vector3d> p_out(block);
   Eigen::Map<Eigen::Quaterniond> q_out(block + 3);

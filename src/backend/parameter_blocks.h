@@ -12,6 +12,7 @@
 // Jacobian J·PlusJacobian is exactly that derivative.
 
 #include <ceres/manifold.h>
+#include <ceres/problem.h>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -35,6 +36,9 @@ class PoseManifold final : public ceres::Manifold {
 
 /// Applies a tangent perturbation to a pose block (same as PoseManifold::Plus).
 void posePlus(const double* x, const double* delta, double* x_plus_delta);
+
+/// Problem options for cost functions, losses and manifolds owned by the caller.
+ceres::Problem::Options borrowingProblemOptions();
 
 /// Writes p and q into a pose block.
 void setPose(const Eigen::Vector3d& p, const Eigen::Quaterniond& q, double* block);

@@ -98,8 +98,7 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, const cv::
                                 std::vector<Feature>& features) {
   if (features.empty() || right.empty() || cams_.size() < 2) return;
   const cv::Size win(params_.klt_window, params_.klt_window);
-  std::vector<cv::Mat>& right_pyr = right_pyr_;
-  cv::buildOpticalFlowPyramid(right, right_pyr, win, params_.klt_levels);
+  const std::vector<cv::Mat>& right_pyr = right_pyr_;  // built once per frame in track()
   std::vector<cv::Point2f> pl, pr, back;
   for (const auto& f : features) pl.emplace_back(static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y()));
   std::vector<uchar> status, status_back;
@@ -225,6 +224,9 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
       if (it != prev_pos.end()) f.velocity_px = (f.uv - toEigen(it->second)) / dt;
     }
   }
+  if (!frame.right.empty() && cams_.size() >= 2)
+    cv::buildOpticalFlowPyramid(frame.right, right_pyr_, cv::Size(params_.klt_window, params_.klt_window),
+                                params_.klt_levels);
   matchRight(pyr, frame.right, out.features);
   matchRight(pyr, frame.right, out.removed);  // removed features may go to the dynamic map
 
