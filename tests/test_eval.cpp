@@ -3,6 +3,7 @@
 #include <random>
 
 #include "core/so3.h"
+#include "eval/dynamic_metrics.h"
 #include "eval/trajectory_metrics.h"
 
 namespace idyvins::eval {
@@ -139,6 +140,35 @@ TEST(Rpe, HandComputedScaleDrift) {
   const ErrorStats s2 = computeRpe(ref, est, 2.0);  // ids every 2 poses (2.2 m >= 2): 2,4,..,10
   EXPECT_EQ(s2.n, 4u);
   EXPECT_NEAR(s2.mean, 0.2, 1e-12);
+}
+
+TEST(DynamicClassification, HandCountedCase) {
+  // Track 1: on a vehicle, 3 observations, eliminated at the third -> all 3 flagged.
+  // Track 2: on a vehicle, 2 observations, confirmed dynamic -> flagged.
+  // Track 3: on a vehicle, seen once, never judged -> missed (only in the strict recall).
+  // Track 4: static, 4 observations, confirmed dynamic by mistake -> 4 false positives.
+  // Track 5: static background, 5 observations, the last one on a vehicle's edge; in the static map.
+  // Track 6: mostly on a vehicle (2 of 3), never flagged; in the static map.
+  std::vector<MaskedObservation> obs = {{1, true, false}, {1, true, false}, {1, true, true},  {2, true, false},
+                                        {2, true, false}, {3, true, false}, {4, false, false}, {4, false, false},
+                                        {4, false, false}, {4, false, false}, {6, true, false}, {6, true, false},
+                                        {6, false, false}};
+  for (int k = 0; k < 4; ++k) obs.push_back({5, false, false});
+  obs.push_back({5, true, false});
+  const DynamicClassification c = classifyDynamic(obs, {2, 4}, {5, 6});
+  EXPECT_EQ(c.observations_on_moving, 9u);
+  EXPECT_EQ(c.observations_static, 9u);
+  EXPECT_EQ(c.true_positives, 5u);
+  EXPECT_EQ(c.false_positives, 4u);
+  EXPECT_DOUBLE_EQ(c.recall, 5.0 / 9.0);
+  EXPECT_DOUBLE_EQ(c.static_flagged, 4.0 / 9.0);
+  EXPECT_EQ(c.observations_on_moving_tracked, 8u);
+  EXPECT_DOUBLE_EQ(c.recall_tracked, 5.0 / 8.0);
+  EXPECT_DOUBLE_EQ(c.precision, 5.0 / 9.0);
+  EXPECT_EQ(c.static_map_points, 2u);
+  EXPECT_EQ(c.static_map_on_moving, 1u);       // track 6 only
+  EXPECT_EQ(c.static_map_ever_on_moving, 2u);  // tracks 5 and 6
+  EXPECT_DOUBLE_EQ(c.static_map_fraction_on_moving, 0.5);
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "io/ply.h"
 #include "commands.h"
 #include "core/error.h"
+#include "eval/dynamic_metrics.h"
 #include "eval/trajectory_metrics.h"
 #include "frontend/feature_tracker.h"
 #include "io/config.h"
@@ -26,7 +27,7 @@ namespace idyvins::app {
 namespace {
 
 struct RunArgs {
-  std::string config, dataset, out, mode;
+  std::string config, dataset, out, mode, dump_observations;
   std::size_t max_frames = 0;
 };
 
@@ -46,6 +47,26 @@ std::vector<int> histogram(const std::vector<double>& d) {
   std::vector<int> h(21, 0);
   for (double v : d) ++h[std::min(20, static_cast<int>(v))];
   return h;
+}
+
+/// --dump-observations: one CSV row per tracked observation with the front end's
+/// label and d_s, and the landmark's final fate in the estimator.
+template <typename Records>
+void writeObservations(const std::string& path, const Records& observations, const backend::Estimator& estimator,
+                       const std::unordered_set<std::uint64_t>& outlier_ids, bool has_masks) {
+  std::unordered_set<std::uint64_t> confirmed, in_static;
+  for (const auto& p : estimator.dynamicMap()) confirmed.insert(p.id);
+  for (const auto& p : estimator.staticMap()) in_static.insert(p.id);
+  std::ofstream f(path);
+  if (!f) throw InputError(path, "cannot write file");
+  f << "t_ns,id,u,v,track_length,frontend_label,d_s_px2,credibility,on_moving,confirmed_dynamic,in_static_map,outlier_removed\n";
+  static const char* kLabels[] = {"static", "candidate", "eliminated"};
+  for (const auto& o : observations)
+    f << o.t_ns << ',' << o.id << ',' << o.u << ',' << o.v << ',' << o.track_length << ','
+      << kLabels[static_cast<int>(o.label)] << ',' << o.d_s << ',' << o.credibility << ','
+      << (has_masks ? (o.on_moving ? "1" : "0") : "") << ',' << confirmed.count(o.id) << ',' << in_static.count(o.id)
+      << ',' << outlier_ids.count(o.id) << '\n';
+  if (!f) throw InputError(path, "write failed");
 }
 
 int runRun(const RunArgs& a) {
@@ -83,9 +104,13 @@ int runRun(const RunArgs& a) {
   struct ObsRecord {
     std::uint64_t id;
     bool on_moving, eliminated;
+    TimeNs t_ns;
+    float u, v, d_s, credibility;
+    frontend::FeatureLabel label;
+    int track_length;
   };
   std::vector<ObsRecord> observations;
-  std::unordered_map<std::uint64_t, bool> gt_moving_ids;  // a landmark ever observed on a moving object
+  std::unordered_set<std::uint64_t> outlier_ids;  // landmarks the outlier test removed at least once
   TimeNs first_t = 0, last_t = 0, init_t = -1;
   double sum_track = 0, sum_opt = 0, sum_filter = 0, sum_marg = 0;
   std::string last_status;
@@ -110,17 +135,24 @@ int runRun(const RunArgs& a) {
                                                     mode == Mode::kSeg ? &frame.left_mask : nullptr);
     // Evaluation against the ground-truth masks (simulated datasets): every tracked
     // observation, and whether the front end eliminated it.
-    if (has_masks) {
+    if (has_masks || !a.dump_observations.empty()) {
       auto on_moving = [&](const frontend::Feature& f) {
+        if (!has_masks) return false;
         const int u = static_cast<int>(std::lround(f.uv.x())), v = static_cast<int>(std::lround(f.uv.y()));
         return frame.left_mask.at<std::uint8_t>(std::clamp(v, 0, frame.left_mask.rows - 1),
                                                 std::clamp(u, 0, frame.left_mask.cols - 1)) != 0;
       };
-      for (const auto& f : ff.features) observations.push_back({f.id, on_moving(f), false});
-      for (const auto& f : ff.removed) observations.push_back({f.id, on_moving(f), true});
-      for (const auto& f : ff.features) gt_moving_ids[f.id] = gt_moving_ids[f.id] || on_moving(f);
+      const float cred = idy_filter ? static_cast<float>(idy_filter->lastStats().credibility) : 0.f;
+      auto record = [&](const frontend::Feature& f, bool eliminated) {
+        observations.push_back({f.id, on_moving(f), eliminated, frame.t_ns, static_cast<float>(f.uv.x()),
+                                static_cast<float>(f.uv.y()), static_cast<float>(f.score), cred, f.label,
+                                f.track_length});
+      };
+      for (const auto& f : ff.features) record(f, false);
+      for (const auto& f : ff.removed) record(f, true);
     }
     const backend::FrameResult r = estimator.addFrame(ff);
+    outlier_ids.insert(r.outlier_ids.begin(), r.outlier_ids.end());
     if (idy && r.initialized) {  // eliminated features with a stereo match go to the dynamic map
       Eigen::Isometry3d T_w_b = Eigen::Isometry3d::Identity();
       T_w_b.linear() = r.state.q_w_b.toRotationMatrix();
@@ -180,28 +212,28 @@ int runRun(const RunArgs& a) {
   for (const auto& p : estimator.dynamicMap()) dynamic_pts.push_back({p.p_w, 2});
   nlohmann::json classification = nullptr;
   if (has_masks) {
+    std::vector<eval::MaskedObservation> masked;
+    masked.reserve(observations.size());
+    for (const auto& o : observations) masked.push_back({o.id, o.on_moving, o.eliminated});
     std::unordered_set<std::uint64_t> confirmed;
     for (const auto& p : estimator.dynamicMap()) confirmed.insert(p.id);
-    std::size_t tp = 0, fp = 0, fn = 0, tn = 0;
-    for (const auto& o : observations) {
-      const bool predicted = o.eliminated || confirmed.count(o.id);
-      (o.on_moving ? (predicted ? tp : fn) : (predicted ? fp : tn)) += 1;
-    }
-    std::size_t static_on_moving = 0;
-    for (const auto& p : estimator.staticMap()) static_on_moving += gt_moving_ids.count(p.id) && gt_moving_ids[p.id];
-    const double precision = tp + fp ? static_cast<double>(tp) / (tp + fp) : 0.0;
-    const double recall = tp + fn ? static_cast<double>(tp) / (tp + fn) : 0.0;
-    classification = {{"observations_on_moving", tp + fn},
-                       {"observations_static", fp + tn},
-                       {"moving_detected_fraction", recall},
-                       {"static_flagged_fraction", fp + tn ? static_cast<double>(fp) / (fp + tn) : 0.0},
-                       {"precision", precision},
-                       {"recall", recall},
-                       {"f1", precision + recall > 0 ? 2 * precision * recall / (precision + recall) : 0.0},
-                       {"static_map_points_on_moving", static_on_moving},
-                       {"static_map_fraction_on_moving",
-                        static_pts.empty() ? 0.0 : static_cast<double>(static_on_moving) / static_pts.size()}};
+    std::vector<std::uint64_t> static_ids;
+    for (const auto& p : estimator.staticMap()) static_ids.push_back(p.id);
+    const eval::DynamicClassification c = eval::classifyDynamic(masked, confirmed, static_ids);
+    classification = {{"observations_on_moving", c.observations_on_moving},
+                      {"observations_static", c.observations_static},
+                      {"moving_detected_fraction", c.recall},
+                      {"moving_detected_fraction_tracked", c.recall_tracked},
+                      {"static_flagged_fraction", c.static_flagged},
+                      {"precision", c.precision},
+                      {"recall", c.recall},
+                      {"f1", c.f1},
+                      {"static_map_points_on_moving", c.static_map_on_moving},
+                      {"static_map_fraction_on_moving", c.static_map_fraction_on_moving},
+                      {"static_map_points_ever_on_moving", c.static_map_ever_on_moving},
+                      {"static_map_fraction_ever_on_moving", c.static_map_fraction_ever_on_moving}};
   }
+  if (!a.dump_observations.empty()) writeObservations(a.dump_observations, observations, estimator, outlier_ids, has_masks);
   std::vector<io::LabelledPoint> all = static_pts;
   all.insert(all.end(), dynamic_pts.begin(), dynamic_pts.end());
   io::writePly(out + "/map_static.ply", static_pts);
@@ -277,6 +309,8 @@ void registerRun(CLI::App& app, int& exit_code) {
   cmd->add_option("-o,--out", a->out, "output folder")->required();
   cmd->add_option("--mode", a->mode, "overrides the config's mode: " + modeNames());
   cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)");
+  cmd->add_option("--dump-observations", a->dump_observations,
+                  "write one CSV row per tracked observation (front-end label, d_s, ground-truth mask, final fate)");
   cmd->callback([a, &exit_code] { exit_code = runRun(*a); });
 }
 

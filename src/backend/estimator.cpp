@@ -144,7 +144,15 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     f.setNav(f.pre->predict(prev));
   }
   count_ = n;
-  r.keyframe = fm_.addFrame(n, ff, config_.solver.keyframe_parallax_px, rig_.focal_px);
+  if (dynamic_ids_.empty()) {
+    r.keyframe = fm_.addFrame(n, ff, config_.solver.keyframe_parallax_px, rig_.focal_px);
+  } else {
+    frontend::FeatureFrame kept = ff;
+    kept.features.clear();
+    for (const auto& feature : ff.features)
+      if (!dynamic_ids_.count(feature.id)) kept.features.push_back(feature);
+    r.keyframe = fm_.addFrame(n, kept, config_.solver.keyframe_parallax_px, rig_.focal_px);
+  }
 
   if (!initialized_) {
     if (!initStep(r)) return r;
@@ -153,7 +161,7 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
   }
   optimize(r);
   if (options_.post_process) postProcess(r);
-  removeOutliers();
+  removeOutliers(r);
   fm_.removeFailures();
   std::string why;
   if (failureDetected(why)) {
@@ -387,28 +395,34 @@ void Estimator::flushMap() {
   for (const auto& [id, lm] : fm_.landmarks()) addToStaticMap(lm);
 }
 
-double Estimator::meanReprojectionErrorPx(const Landmark& lm) const {
+double Estimator::meanReprojectionErrorPx(const Landmark& lm, int last_n) const {
   const Observation& a = lm.obs.front();
   const Vector3d pts_i(a.xy.x(), a.xy.y(), 1.0);
   const imu::NavState si = frames_[lm.start_frame].nav();
+  const std::size_t first =
+      last_n > 0 ? std::max<std::size_t>(1, lm.obs.size() - std::min<std::size_t>(last_n, lm.obs.size())) : 1;
   double sum = 0;
-  for (std::size_t k = 1; k < lm.obs.size(); ++k) {
+  for (std::size_t k = first; k < lm.obs.size(); ++k) {
     const imu::NavState sj = frames_[lm.start_frame + k].nav();
     const Vector3d p = transferPoint(pts_i, lm.inv_depth, si.p_w_b, si.q_w_b, sj.p_w_b, sj.q_w_b, rig_.T_b_c0, rig_.T_b_c0);
     sum += (p.head<2>() / p.z() - lm.obs[k].xy).norm() * rig_.focal_px;
   }
-  return lm.obs.size() > 1 ? sum / static_cast<double>(lm.obs.size() - 1) : 0.0;
+  return lm.obs.size() > first ? sum / static_cast<double>(lm.obs.size() - first) : 0.0;
 }
 
 void Estimator::postProcess(FrameResult& r) {
   std::vector<std::uint64_t> confirmed;
   for (auto& [id, lm] : fm_.landmarks()) {
     if (lm.label != frontend::FeatureLabel::kCandidate || !lm.usable() || lm.obs.size() < 2) continue;
-    if (meanReprojectionErrorPx(lm) > options_.outlier_px) {
+    // The error of the observations made since the landmark was marked: a long static
+    // history must not dilute an object that has just started to move.
+    if (meanReprojectionErrorPx(lm, lm.candidate_obs) > options_.outlier_px) {
       confirmed.push_back(id);
+      dynamic_ids_.insert(id);
       if (mapped_.insert(id).second) dynamic_map_.push_back({landmarkWorld(lm), 2, id});
-    } else if (static_cast<int>(lm.obs.size()) >= options_.clear_after_observations) {
+    } else if (lm.candidate_obs >= options_.clear_after_observations) {
       lm.label = frontend::FeatureLabel::kStatic;
+      lm.candidate_obs = 0;
       ++r.cleared;
     }
   }
@@ -416,8 +430,8 @@ void Estimator::postProcess(FrameResult& r) {
   fm_.remove(confirmed);
 }
 
-void Estimator::removeOutliers() {
-  std::vector<std::uint64_t> bad;
+void Estimator::removeOutliers(FrameResult& r) {
+  std::vector<std::uint64_t>& bad = r.outlier_ids;
   for (const auto& [id, lm] : fm_.landmarks())
     if (lm.usable() && lm.obs.size() > 1 && meanReprojectionErrorPx(lm) > options_.outlier_px) bad.push_back(id);
   fm_.remove(bad);

@@ -32,7 +32,9 @@ struct EstimatorOptions {
   bool candidate_weights = false;
   /// DESIGN §4.6: confirm candidates as dynamic (leave the window) or clear them to static.
   bool post_process = false;
-  int clear_after_observations = 4;  ///< a candidate that passes with this many observations becomes static
+  int clear_after_observations = 4;
+  /// Experimental: a landmark failing the outlier test is treated like a confirmed-dynamic candidate.
+  bool outliers_are_dynamic = false;  ///< a candidate that passes with this many observations becomes static
 };
 
 /// A map point with its label: 0 static, 1 eliminated in the front end, 2 confirmed dynamic.
@@ -55,6 +57,7 @@ struct FrameResult {
   int candidates = 0;        ///< candidate landmarks in the solve
   int confirmed_dynamic = 0; ///< candidates confirmed dynamic after this solve
   int cleared = 0;           ///< candidates cleared to static after this solve
+  std::vector<std::uint64_t> outlier_ids;  ///< landmarks removed by the outlier test after this solve
   bool keyframe = false;
 };
 
@@ -97,10 +100,11 @@ class Estimator {
   bool pnp(int frame);
   bool alignAndStart();
   void optimize(FrameResult& result);
-  void removeOutliers();
+  void removeOutliers(FrameResult& result);
   void postProcess(FrameResult& result);
-  /// Mean left-camera reprojection error (px) of a landmark from its anchor into its other observations.
-  double meanReprojectionErrorPx(const Landmark& lm) const;
+  /// Mean left-camera reprojection error (px) of a landmark from its anchor into its other
+  /// observations, or into its newest `last_n` ones only (0: all).
+  double meanReprojectionErrorPx(const Landmark& lm, int last_n = 0) const;
   Eigen::Vector3d landmarkWorld(const Landmark& lm) const;
   void addToStaticMap(const Landmark& lm);
   bool failureDetected(std::string& why) const;
@@ -122,6 +126,9 @@ class Estimator {
   Eigen::Isometry3d last_T_w_b_ = Eigen::Isometry3d::Identity();
   std::vector<MapPoint> static_map_, dynamic_map_;
   std::set<std::uint64_t> mapped_;
+  /// Confirmed-dynamic landmark ids (DESIGN §4.6): they left the window for good, so
+  /// later observations of the same front-end track are ignored.
+  std::set<std::uint64_t> dynamic_ids_;
 };
 
 }  // namespace idyvins::backend

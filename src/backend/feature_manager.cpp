@@ -50,13 +50,19 @@ bool FeatureManager::addFrame(int frame, const frontend::FeatureFrame& ff, doubl
       lm.start_frame = frame;
       lm.obs.push_back(o);
       lm.label = f.label;
+      lm.candidate_obs = f.label == frontend::FeatureLabel::kCandidate ? 1 : 0;
       landmarks_.emplace(f.id, lm);
       ++new_features;
     } else {
-      it->second.obs.push_back(o);
-      if (f.label != frontend::FeatureLabel::kStatic) it->second.label = f.label;  // sticky candidate
+      Landmark& lm = it->second;
+      lm.obs.push_back(o);
+      if (f.label == frontend::FeatureLabel::kCandidate && lm.label != frontend::FeatureLabel::kCandidate) {
+        lm.label = f.label;  // sticky until post-processing decides
+        lm.candidate_obs = 0;
+      }
+      if (lm.label == frontend::FeatureLabel::kCandidate) ++lm.candidate_obs;
       ++tracked;
-      if (it->second.obs.size() >= 4) ++long_tracks;
+      if (lm.obs.size() >= 4) ++long_tracks;
     }
   }
   if (frame < 2 || tracked < 20 || long_tracks < 40 || new_features > 0.5 * tracked) return true;
