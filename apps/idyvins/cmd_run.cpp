@@ -103,7 +103,7 @@ int runRun(const RunArgs& a) {
   std::size_t count = 0, frames_without_prior = 0;
   struct ObsRecord {
     std::uint64_t id;
-    bool on_moving, eliminated;
+    bool on_moving;
     TimeNs t_ns;
     float u, v, d_s, credibility;
     frontend::FeatureLabel label;
@@ -143,13 +143,13 @@ int runRun(const RunArgs& a) {
                                                 std::clamp(u, 0, frame.left_mask.cols - 1)) != 0;
       };
       const float cred = idy_filter ? static_cast<float>(idy_filter->lastStats().credibility) : 0.f;
-      auto record = [&](const frontend::Feature& f, bool eliminated) {
-        observations.push_back({f.id, on_moving(f), eliminated, frame.t_ns, static_cast<float>(f.uv.x()),
+      auto record = [&](const frontend::Feature& f) {
+        observations.push_back({f.id, on_moving(f), frame.t_ns, static_cast<float>(f.uv.x()),
                                 static_cast<float>(f.uv.y()), static_cast<float>(f.score), cred, f.label,
                                 f.track_length});
       };
-      for (const auto& f : ff.features) record(f, false);
-      for (const auto& f : ff.removed) record(f, true);
+      for (const auto& f : ff.features) record(f);
+      for (const auto& f : ff.removed) record(f);  // label kEliminated
     }
     const backend::FrameResult r = estimator.addFrame(ff);
     outlier_ids.insert(r.outlier_ids.begin(), r.outlier_ids.end());
@@ -157,12 +157,12 @@ int runRun(const RunArgs& a) {
       Eigen::Isometry3d T_w_b = Eigen::Isometry3d::Identity();
       T_w_b.linear() = r.state.q_w_b.toRotationMatrix();
       T_w_b.translation() = r.state.p_w_b;
+      const Eigen::Isometry3d T_w_c0 = backend::cameraPose(T_w_b, estimator.rig().T_b_c0);
+      const Eigen::Isometry3d T_w_c1 = backend::cameraPose(T_w_b, estimator.rig().T_b_c1);
       for (const auto& f : ff.removed) {
         if (!f.has_right) continue;
-        const Eigen::Vector3d p_w = backend::triangulateTwoViews(
-            backend::cameraPose(T_w_b, estimator.rig().T_b_c0), f.xy, backend::cameraPose(T_w_b, estimator.rig().T_b_c1),
-            f.xy_right);
-        const double z = (backend::cameraPose(T_w_b, estimator.rig().T_b_c0).inverse() * p_w).z();
+        const Eigen::Vector3d p_w = backend::triangulateTwoViews(T_w_c0, f.xy, T_w_c1, f.xy_right);
+        const double z = (T_w_c0.inverse() * p_w).z();
         if (z > 0.1 && z < 80.0) eliminated_points.push_back({p_w, 1});
       }
     }
@@ -214,7 +214,7 @@ int runRun(const RunArgs& a) {
   if (has_masks) {
     std::vector<eval::MaskedObservation> masked;
     masked.reserve(observations.size());
-    for (const auto& o : observations) masked.push_back({o.id, o.on_moving, o.eliminated});
+    for (const auto& o : observations) masked.push_back({o.id, o.on_moving, o.label == frontend::FeatureLabel::kEliminated});
     std::unordered_set<std::uint64_t> confirmed;
     for (const auto& p : estimator.dynamicMap()) confirmed.insert(p.id);
     std::vector<std::uint64_t> static_ids;

@@ -144,15 +144,7 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     f.setNav(f.pre->predict(prev));
   }
   count_ = n;
-  if (dynamic_ids_.empty()) {
-    r.keyframe = fm_.addFrame(n, ff, config_.solver.keyframe_parallax_px, rig_.focal_px);
-  } else {
-    frontend::FeatureFrame kept = ff;
-    kept.features.clear();
-    for (const auto& feature : ff.features)
-      if (!dynamic_ids_.count(feature.id)) kept.features.push_back(feature);
-    r.keyframe = fm_.addFrame(n, kept, config_.solver.keyframe_parallax_px, rig_.focal_px);
-  }
+  r.keyframe = fm_.addFrame(n, ff, config_.solver.keyframe_parallax_px, rig_.focal_px, dynamic_ids_);
 
   if (!initialized_) {
     if (!initStep(r)) return r;

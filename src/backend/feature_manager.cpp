@@ -34,9 +34,10 @@ Vector3d triangulateTwoViews(const Isometry3d& T_w_c0, const Vector2d& xy0, cons
 }
 
 bool FeatureManager::addFrame(int frame, const frontend::FeatureFrame& ff, double keyframe_parallax_px,
-                              double focal_px) {
+                              double focal_px, const std::set<std::uint64_t>& excluded) {
   int tracked = 0, new_features = 0, long_tracks = 0;
   for (const auto& f : ff.features) {
+    if (excluded.count(f.id)) continue;
     Observation o;
     o.xy = f.xy;
     o.uv = f.uv;

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <map>
+#include <set>
 #include <vector>
 
 #include "backend/projection_factors.h"
@@ -46,7 +47,9 @@ class FeatureManager {
   /// Adds the features of window frame `frame`; returns true if it should be a keyframe
   /// (VINS-Fusion's rule: few tracked / many new features, or mean parallax to the
   /// previous frames ≥ keyframe_parallax_px).
-  bool addFrame(int frame, const frontend::FeatureFrame& features, double keyframe_parallax_px, double focal_px);
+  /// Features whose id is in `excluded` (confirmed-dynamic tracks) are skipped.
+  bool addFrame(int frame, const frontend::FeatureFrame& features, double keyframe_parallax_px, double focal_px,
+                const std::set<std::uint64_t>& excluded = {});
 
   /// Triangulates landmarks without depth: stereo in the anchor frame first, else two
   /// views of the window. T_w_b holds the window's body poses.
