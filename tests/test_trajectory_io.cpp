@@ -3,6 +3,7 @@
 #include <random>
 
 #include "core/error.h"
+#include "io/euroc_dataset.h"
 #include "io/trajectory_io.h"
 #include "test_util.h"
 
@@ -52,6 +53,28 @@ TEST(TrajectoryIo, EurocCsvRoundTrip) {
   writeEurocCsv(dir / "t.csv", poses);
   expectSame(poses, readEurocCsv(dir / "t.csv"));
   expectSame(poses, readTrajectory(dir / "t.csv"));
+}
+
+TEST(TrajectoryIo, StateCsvRoundTripsThroughTheGroundTruthReader) {
+  TempDir dir;
+  std::vector<GroundTruthState> states;
+  for (const auto& p : randomTrajectory(20)) {
+    const double k = static_cast<double>(states.size());
+    states.push_back({p.t_ns, p.p_w_b, p.q_w_b, {k, -k, 0.5}, {1e-3 * k, -2e-3, 3e-4}, {0.05, -0.1 * k, 0.2}});
+  }
+  writeStateCsv(dir / "s.csv", states);
+  const auto back = readGroundTruthCsv(dir / "s.csv");
+  ASSERT_EQ(back.size(), states.size());
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    EXPECT_EQ(back[i].t_ns, states[i].t_ns);
+    EXPECT_LT((back[i].p_w_b - states[i].p_w_b).norm(), 1e-9);
+    EXPECT_LT(back[i].q_w_b.angularDistance(states[i].q_w_b), 1e-9);
+    EXPECT_LT((back[i].v_w - states[i].v_w).norm(), 1e-9);
+    EXPECT_LT((back[i].bg - states[i].bg).norm(), 1e-12);
+    EXPECT_LT((back[i].ba - states[i].ba).norm(), 1e-9);
+  }
+  // The pose reader accepts it too (17 columns).
+  EXPECT_EQ(readTrajectory(dir / "s.csv").size(), states.size());
 }
 
 TEST(TrajectoryIo, TumQuaternionOrderIsXyzw) {

@@ -63,6 +63,21 @@ void writeEurocCsv(const std::string& path, const std::vector<StampedPose>& pose
   if (std::ferror(f.get())) throw InputError(path, "write failed");
 }
 
+void writeStateCsv(const std::string& path, const std::vector<GroundTruthState>& states) {
+  FilePtr f = openForWrite(path);
+  std::fprintf(f.get(),
+               "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], "
+               "v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], "
+               "b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], b_a_RS_S_z [m s^-2]\n");
+  for (const auto& g : states) {
+    std::fprintf(f.get(), "%lld,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n",
+                 static_cast<long long>(g.t_ns), g.p_w_b.x(), g.p_w_b.y(), g.p_w_b.z(), g.q_w_b.w(), g.q_w_b.x(),
+                 g.q_w_b.y(), g.q_w_b.z(), g.v_w.x(), g.v_w.y(), g.v_w.z(), g.bg.x(), g.bg.y(), g.bg.z(), g.ba.x(),
+                 g.ba.y(), g.ba.z());
+  }
+  if (std::ferror(f.get())) throw InputError(path, "write failed");
+}
+
 std::vector<StampedPose> readTum(const std::string& path) {
   const auto rows = readTable(path, {' ', 8, 8});
   std::vector<StampedPose> poses;

@@ -15,6 +15,10 @@ void writeTum(const std::string& path, const std::vector<StampedPose>& poses);
 /// Writes a EuRoC-style CSV trajectory (time in ns, position, quaternion w x y z).
 void writeEurocCsv(const std::string& path, const std::vector<StampedPose>& poses);
 
+/// Writes the 17-column EuRoC state CSV (time ns, p, q wxyz, v, gyro bias, accel bias), the
+/// format of `state_groundtruth_estimate0/data.csv`.
+void writeStateCsv(const std::string& path, const std::vector<GroundTruthState>& states);
+
 /// Reads a TUM trajectory (8 whitespace-separated columns, increasing time).
 std::vector<StampedPose> readTum(const std::string& path);
 

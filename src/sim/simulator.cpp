@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "core/error.h"
+#include "io/trajectory_io.h"
 #include "sim/renderer.h"
 #include "sim/textures.h"
 
@@ -149,18 +150,7 @@ void writeImuAndTruth(const fs::path& mav0, const std::vector<ImuSample>& imu,
     s += buf;
   }
   writeText(mav0 / "imu0" / "data.csv", s);
-  s = "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], "
-      "v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], "
-      "b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], b_a_RS_S_z [m s^-2]\n";
-  for (const auto& g : truth) {
-    std::snprintf(buf, sizeof(buf),
-                  "%lld,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n",
-                  static_cast<long long>(g.t_ns), g.p_w_b.x(), g.p_w_b.y(), g.p_w_b.z(), g.q_w_b.w(), g.q_w_b.x(),
-                  g.q_w_b.y(), g.q_w_b.z(), g.v_w.x(), g.v_w.y(), g.v_w.z(), g.bg.x(), g.bg.y(), g.bg.z(), g.ba.x(),
-                  g.ba.y(), g.ba.z());
-    s += buf;
-  }
-  writeText(mav0 / "state_groundtruth_estimate0" / "data.csv", s);
+  io::writeStateCsv((mav0 / "state_groundtruth_estimate0" / "data.csv").string(), truth);
 }
 
 nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult& r, const Config& rig) {
