@@ -9,6 +9,7 @@
 #include <opencv2/core/eigen.hpp>
 #include <unordered_map>
 
+#include "backend/gauge.h"
 #include "backend/imu_factor.h"
 #include "backend/initializer.h"
 #include "backend/parameter_blocks.h"
@@ -360,8 +361,20 @@ void Estimator::optimize(FrameResult& r) {
   o.max_num_iterations = config_.solver.max_num_iterations;
   o.max_solver_time_in_seconds = config_.solver.max_solver_time_s;
   o.num_threads = 1;  // deterministic
+  const Isometry3d T_w_b0_before = frames_[0].T_w_b();
   ceres::Solver::Summary summary;
   ceres::Solve(o, &problem, &summary);
+  if (options_.fix_gauge) {
+    const Isometry3d G = gaugeCorrection(T_w_b0_before, frames_[0].T_w_b());
+    const Quaterniond q_G(G.linear());
+    for (int i = 0; i <= count_; ++i) {
+      imu::NavState s = frames_[i].nav();
+      s.p_w_b = G * s.p_w_b;
+      s.q_w_b = (q_G * s.q_w_b).normalized();
+      s.v_w = q_G * s.v_w;
+      frames_[i].setNav(s);
+    }
+  }
   for (int i = 1; i <= count_; ++i) {
     const imu::NavState s = frames_[i - 1].nav();
     if (frames_[i].pre->needsRepropagation(s.ba, s.bg)) frames_[i].pre->repropagate(s.ba, s.bg);

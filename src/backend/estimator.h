@@ -32,9 +32,9 @@ struct EstimatorOptions {
   bool candidate_weights = false;
   /// DESIGN §4.6: confirm candidates as dynamic (leave the window) or clear them to static.
   bool post_process = false;
-  int clear_after_observations = 4;
-  /// Experimental: a landmark failing the outlier test is treated like a confirmed-dynamic candidate.
-  bool outliers_are_dynamic = false;  ///< a candidate that passes with this many observations becomes static
+  int clear_after_observations = 4;  ///< a candidate that passes with this many observations becomes static
+  /// Keep the oldest frame's yaw and position through each solve (backend/gauge.h).
+  bool fix_gauge = true;
 };
 
 /// A map point with its label: 0 static, 1 eliminated in the front end, 2 confirmed dynamic.
