@@ -307,7 +307,8 @@ void registerRun(CLI::App& app, int& exit_code) {
       "sliding-window estimator. Writes OUT/trajectory.tum (TUM), OUT/trajectory.csv (EuRoC),\n"
       "OUT/state.csv (pose, velocity, biases; EuRoC ground-truth columns)\n"
       "and OUT/stats.json (per-frame timing, feature counts, status, resets). Offline and\n"
-      "deterministic: frames are processed as fast as possible, in order.");
+      "deterministic up to the solver's wall-clock limit (max_solver_time): frames are\n"
+      "processed as fast as possible, in order.");
   cmd->add_option("-c,--config", a->config, "VINS-Fusion config")->required();
   cmd->add_option("-d,--dataset", a->dataset, "EuRoC folder")->required();
   cmd->add_option("-o,--out", a->out, "output folder")->required();
