@@ -28,6 +28,7 @@ struct BenchArgs {
   std::string suite = "standard", out, seeds = "1", data;
   double duration = 60.0;
   bool ablations = false;
+  bool reuse_runs = false;
   int jobs = 2;
 };
 
@@ -117,6 +118,10 @@ int runBench(const BenchArgs& a) {
   auto worker = [&] {
     for (std::size_t k = next++; k < jobs.size(); k = next++) {
       const Job& j = jobs[k];
+      if (a.reuse_runs && fs::exists(fs::path(j.out) / "stats.json")) {  // finished earlier: keep it
+        ++done;
+        continue;
+      }
       const std::string cmd = quote(exe) + " run --config " + quote(j.dataset + "/config/sim_stereo_imu_config.yaml") +
                               " --dataset " + quote(j.dataset) + " --out " + quote(j.out) + " --mode " + j.mode + " > " +
                               quote(j.out + ".log") + " 2>&1";
@@ -266,6 +271,9 @@ void registerBench(CLI::App& app, int& exit_code) {
   cmd->add_option("--data", a->data, "where the simulated datasets live (default OUT/data)");
   cmd->add_option("-j,--jobs", a->jobs, "runs in parallel (default 2)")->check(CLI::Range(1, 64));
   cmd->add_flag("--ablations", a->ablations, "also run idy-pre and idy-ba");
+  cmd->add_flag("--reuse-runs", a->reuse_runs,
+                "keep runs that already have OUT/runs/<sequence>_<mode>/stats.json (resume an interrupted\n"
+                "benchmark, or re-run only the modes whose run folders were deleted)");
   cmd->callback([a, &exit_code] { exit_code = runBench(*a); });
 }
 

@@ -89,7 +89,12 @@ int runRun(const RunArgs& a) {
   std::filesystem::create_directories(a.out, ec);
   if (ec) throw InputError(a.out, "cannot create output folder: " + ec.message());
 
-  frontend::FeatureTracker tracker(config);
+  frontend::TrackerParams tracker_params;
+  // IDY elimination (DESIGN §4.3, session-3 refinement): eliminated features never reach
+  // the estimator again, but the tracker keeps following them so that no new corner is
+  // seeded on the same moving object.
+  tracker_params.keep_following_eliminated = mode == Mode::kIdy || mode == Mode::kIdyPre;
+  frontend::FeatureTracker tracker(config, tracker_params);
   auto filter = makeFilter(mode, config);
   backend::EstimatorOptions est_options;
   est_options.candidate_weights = est_options.post_process = mode == Mode::kIdy || mode == Mode::kIdyBa;

@@ -31,7 +31,9 @@ struct Feature {
 struct FeatureFrame {
   TimeNs t_ns = 0;
   std::vector<Feature> features;
-  std::vector<Feature> removed;  ///< features the filter removed in this frame (label kEliminated)
+  /// Features labelled kEliminated in this frame: removed by the filter now, or (with
+  /// TrackerParams::keep_following_eliminated) removed earlier and still followed.
+  std::vector<Feature> removed;
   double tracking_ms = 0;  ///< KLT, detection, stereo, undistortion
   double filter_ms = 0;    ///< the rejection filter (ransac / seg / idy preprocessing)
   std::size_t tracked = 0;     ///< features carried over from the previous frame (before the filter)

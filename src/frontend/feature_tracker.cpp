@@ -28,6 +28,7 @@ FeatureTracker::FeatureTracker(const Config& config, const TrackerParams& params
 void FeatureTracker::reset() {
   prev_pyr_.clear();
   prev_tracks_.clear();
+  followed_.clear();
 }
 
 bool FeatureTracker::inBorder(const cv::Point2f& p) const {
@@ -139,6 +140,24 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   std::vector<Eigen::Vector2d> prev_uv, prev_xy;
   trackPrevious(pyr, tracks, prev_uv, prev_xy);
   out.tracked = tracks.size();
+  // Eliminated tracks still followed skip the filter and the output (reported as removed below).
+  std::vector<Track> followed;
+  if (!followed_.empty()) {
+    std::vector<Track> rest;
+    std::vector<Eigen::Vector2d> rest_uv, rest_xy;
+    for (std::size_t i = 0; i < tracks.size(); ++i) {
+      if (followed_.count(tracks[i].id)) {
+        followed.push_back(tracks[i]);
+        continue;
+      }
+      rest.push_back(tracks[i]);
+      rest_uv.push_back(prev_uv[i]);
+      rest_xy.push_back(prev_xy[i]);
+    }
+    tracks = std::move(rest);
+    prev_uv = std::move(rest_uv);
+    prev_xy = std::move(rest_xy);
+  }
   const double dt = prev_pyr_.empty() ? 0.0 : toSeconds(frame.t_ns - prev_t_ns_);
 
   // Rejection filter on tracked features (before the top-up, so holes refill now).
@@ -188,6 +207,24 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   std::unordered_map<std::uint64_t, Feature> carried;  // id -> feature as the filter labelled it
   for (const auto& f : tracked_feats) carried.emplace(f.id, f);
   out.rejected = out.removed.size();
+  if (params_.keep_following_eliminated) {
+    for (const auto& f : out.removed)
+      followed.push_back({f.id, cv::Point2f(static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y())), f.xy,
+                          f.track_length});
+    for (const auto& t : followed) {
+      Feature f;
+      f.id = t.id;
+      f.uv = toEigen(t.uv);
+      f.xy = t.xy;
+      f.track_length = t.length;
+      f.label = FeatureLabel::kEliminated;
+      if (!std::any_of(out.removed.begin(), out.removed.end(), [&](const Feature& r) { return r.id == t.id; }))
+        out.removed.push_back(f);
+    }
+    followed_.clear();
+    for (const auto& t : followed) followed_.insert(t.id);
+    tracks.insert(tracks.end(), followed.begin(), followed.end());  // they occupy their place in detectNew
+  }
 
   detectNew(frame.left, tracks, out.detected);
   std::vector<Track> fresh;
@@ -208,6 +245,9 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
       f.xy = t.xy;
       f.track_length = 1;
       out.features.push_back(f);
+    } else if (followed_.count(t.id)) {
+      final_tracks.push_back(t);  // followed, not output
+      continue;
     } else {
       auto it = carried.find(t.id);
       if (it == carried.end()) continue;

@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <opencv2/core/mat.hpp>
+#include <unordered_set>
 #include <vector>
 
 #include "camera/camera_model.h"
@@ -25,6 +26,11 @@ struct TrackerParams {
   double flow_back_px = 0.5;       ///< max forward-backward distance
   double stereo_epipolar_px = 2.0; ///< max distance of a right match to its epipolar line
   int border_px = 1;
+  /// Keep following features the filter eliminated (IDY modes): they are reported in
+  /// FeatureFrame::removed every frame and never output as features again, but they
+  /// keep their place in the image so that no new corner is seeded on the same moving
+  /// object (a fresh corner there would enter the estimator unscored for a frame).
+  bool keep_following_eliminated = false;
 };
 
 /// Tracks features across stereo frames; one instance per sequence.
@@ -61,6 +67,7 @@ class FeatureTracker {
   std::vector<cv::Mat> prev_pyr_, cur_pyr_, right_pyr_;  ///< reused across frames (no per-frame allocation)
   cv::Mat detect_mask_;
   std::vector<Track> prev_tracks_;
+  std::unordered_set<std::uint64_t> followed_;  ///< eliminated tracks still followed (keep_following_eliminated)
   TimeNs prev_t_ns_ = 0;
   std::uint64_t next_id_ = 0;
 };
