@@ -208,9 +208,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   for (const auto& f : tracked_feats) carried.emplace(f.id, f);
   out.rejected = out.removed.size();
   if (params_.keep_following_eliminated) {
-    for (const auto& f : out.removed)
-      followed.push_back({f.id, cv::Point2f(static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y())), f.xy,
-                          f.track_length});
+    // Report the ones followed from earlier frames, then follow the newly removed ones too.
     for (const auto& t : followed) {
       Feature f;
       f.id = t.id;
@@ -218,8 +216,12 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
       f.xy = t.xy;
       f.track_length = t.length;
       f.label = FeatureLabel::kEliminated;
-      if (!std::any_of(out.removed.begin(), out.removed.end(), [&](const Feature& r) { return r.id == t.id; }))
-        out.removed.push_back(f);
+      out.removed.push_back(f);
+    }
+    for (std::size_t i = 0; i < out.rejected; ++i) {
+      const Feature& f = out.removed[i];
+      followed.push_back({f.id, cv::Point2f(static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y())), f.xy,
+                          f.track_length});
     }
     followed_.clear();
     for (const auto& t : followed) followed_.insert(t.id);
