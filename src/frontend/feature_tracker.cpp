@@ -25,6 +25,16 @@ FeatureTracker::FeatureTracker(const Config& config, const TrackerParams& params
   }
 }
 
+Feature FeatureTracker::featureOf(const Track& t, FeatureLabel label) {
+  Feature f;
+  f.id = t.id;
+  f.uv = toEigen(t.uv);
+  f.xy = t.xy;
+  f.track_length = t.length;
+  f.label = label;
+  return f;
+}
+
 void FeatureTracker::reset() {
   prev_pyr_.clear();
   prev_tracks_.clear();
@@ -166,14 +176,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   auto runFilter = [&](std::vector<Track>& list, const std::vector<Eigen::Vector2d>* puv,
                        const std::vector<Eigen::Vector2d>* pxy, std::vector<Feature>& feats) {
     feats.clear();
-    for (const auto& t : list) {
-      Feature f;
-      f.id = t.id;
-      f.uv = toEigen(t.uv);
-      f.xy = t.xy;
-      f.track_length = t.length;
-      feats.push_back(f);
-    }
+    for (const auto& t : list) feats.push_back(featureOf(t));
     if (!filter) return;
     const auto t0 = Clock::now();
     std::vector<FilterItem> items(feats.size());
@@ -209,15 +212,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   out.rejected = out.removed.size();
   if (params_.keep_following_eliminated) {
     // Report the ones followed from earlier frames, then follow the newly removed ones too.
-    for (const auto& t : followed) {
-      Feature f;
-      f.id = t.id;
-      f.uv = toEigen(t.uv);
-      f.xy = t.xy;
-      f.track_length = t.length;
-      f.label = FeatureLabel::kEliminated;
-      out.removed.push_back(f);
-    }
+    for (const auto& t : followed) out.removed.push_back(featureOf(t, FeatureLabel::kEliminated));
     for (std::size_t i = 0; i < out.rejected; ++i) {
       const Feature& f = out.removed[i];
       followed.push_back({f.id, cv::Point2f(static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y())), f.xy,
@@ -241,16 +236,8 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   for (const auto& t : tracks) {
     if (t.length == 1) {
       if (!fresh_kept.count(t.id)) continue;
-      Feature f;
-      f.id = t.id;
-      f.uv = toEigen(t.uv);
-      f.xy = t.xy;
-      f.track_length = 1;
-      out.features.push_back(f);
-    } else if (followed_.count(t.id)) {
-      final_tracks.push_back(t);  // followed, not output
-      continue;
-    } else {
+      out.features.push_back(featureOf(t));
+    } else if (!followed_.count(t.id)) {  // followed tracks are kept, not output
       auto it = carried.find(t.id);
       if (it == carried.end()) continue;
       out.features.push_back(it->second);

@@ -54,6 +54,7 @@ class FeatureTracker {
     Eigen::Vector2d xy;
     int length;
   };
+  static Feature featureOf(const Track& t, FeatureLabel label = FeatureLabel::kStatic);
   void trackPrevious(const std::vector<cv::Mat>& pyr, std::vector<Track>& tracks,
                      std::vector<Eigen::Vector2d>& prev_uv, std::vector<Eigen::Vector2d>& prev_xy);
   void detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected);
