@@ -57,10 +57,17 @@ bool smoothDepth(const cv::Mat& depth, const Vector2d& uv, double& z, int r = 2)
   return true;
 }
 
-TEST(FeatureTracker, TracksFollowTheTrueProjectionsOnAStaticSequence) {
+/// Tracking accuracy over the first 100 frames of a static city sequence, against
+/// the true projections of each track's first-frame 3D point.
+struct TrackAccuracy {
+  double median = 0, p99 = 0, switch_rate = 0, v99 = 0;
+  std::size_t steps = 0;
+};
+
+TrackAccuracy measureTrackAccuracy(const TrackerParams& params) {
   const sim::Scene scene(options("city", sim::Level::kNone, 5.0));
   const Config& rig = scene.rig();
-  FeatureTracker tracker(rig);
+  FeatureTracker tracker(rig, params);
   const auto cam = camera::makeCamera(rig.cams[0]);
   std::map<std::uint64_t, Vector3d> point_w;  // 3D point of each track, from its first frame
   std::map<std::uint64_t, bool> switched;
@@ -103,22 +110,40 @@ TEST(FeatureTracker, TracksFollowTheTrueProjectionsOnAStaticSequence) {
     std::printf("track length %d-%d: n %zu median %.3f p99 %.3f\n", 10 * b, 10 * b + 9, v.size(), v[v.size() / 2],
                 v[v.size() * 99 / 100]);
   }
-  ASSERT_GT(errors.size(), 3000u);
+  TrackAccuracy acc;
+  if (errors.empty() || vertical.empty()) return acc;
   std::sort(errors.begin(), errors.end());
   std::sort(vertical.begin(), vertical.end());
-  const double median = errors[errors.size() / 2], p99 = errors[errors.size() * 99 / 100];
-  const double switch_rate = static_cast<double>(switches) / steps;
-  const double v99 = vertical[vertical.size() * 99 / 100];
+  acc.median = errors[errors.size() / 2];
+  acc.p99 = errors[errors.size() * 99 / 100];
+  acc.steps = errors.size();
+  acc.switch_rate = static_cast<double>(switches) / steps;
+  acc.v99 = vertical[vertical.size() * 99 / 100];
   std::printf("tracking over 100 frames: %zu track steps, median error %.3f px, p99 %.3f px, id switches %zu "
               "(%.3f%%); stereo matches %zu, vertical residual p99 %.3f px\n",
-              steps, median, p99, switches, 100 * switch_rate, stereo_total, v99);
-  EXPECT_LT(median, 0.3);
-  // The target is p99 < 1.5 px; translation-only KLT drifts on oblique facades
-  // and the near ground under forward motion (measured p99 2.26 px, README). This bound
-  // keeps the measured figure from getting worse.
-  EXPECT_LT(p99, 2.5);
-  EXPECT_LT(switch_rate, 0.005);
-  EXPECT_LT(v99, 1.0);
+              steps, acc.median, acc.p99, switches, 100 * acc.switch_rate, stereo_total, acc.v99);
+  return acc;
+}
+
+TEST(FeatureTracker, TracksFollowTheTrueProjectionsOnAStaticSequence) {
+  const TrackAccuracy acc = measureTrackAccuracy(TrackerParams{});
+  ASSERT_GT(acc.steps, 3000u);
+  EXPECT_LT(acc.median, 0.3);
+  EXPECT_LT(acc.p99, 1.5);  // the front-end issue's target; KLT alone: 2.09 px (next test)
+  EXPECT_LT(acc.switch_rate, 0.005);
+  EXPECT_LT(acc.v99, 1.0);
+}
+
+TEST(FeatureTracker, FirstPatchAlignmentRemovesKltDrift) {
+  TrackerParams klt_only;
+  klt_only.align_first_patch = false;
+  const TrackAccuracy klt = measureTrackAccuracy(klt_only);
+  const TrackAccuracy aligned = measureTrackAccuracy(TrackerParams{});
+  EXPECT_GT(klt.p99, 1.5);  // translation-only KLT drifts on oblique facades and the near ground
+  EXPECT_LT(aligned.p99, 0.75 * klt.p99);
+  EXPECT_LT(aligned.median, 0.5 * klt.median);
+  // Dropping the tracks whose patch no longer matches must not cost most of the tracking.
+  EXPECT_GT(static_cast<double>(aligned.steps), 0.6 * static_cast<double>(klt.steps));
 }
 
 TEST(FeatureTracker, KeepsMaxCountAndMinDistance) {

@@ -46,7 +46,7 @@ bool FeatureTracker::inBorder(const cv::Point2f& p) const {
   return p.x >= b && p.y >= b && p.x < config_.image_width - b && p.y < config_.image_height - b;
 }
 
-void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, std::vector<Track>& tracks,
+void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Mat& image, std::vector<Track>& tracks,
                                    std::vector<Eigen::Vector2d>& prev_uv, std::vector<Eigen::Vector2d>& prev_xy) {
   if (prev_pyr_.empty() || prev_tracks_.empty()) return;
   std::vector<cv::Point2f> p0, p1, back;
@@ -66,10 +66,21 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, std::vector<
     if (ok && config_.tracker.flow_back)
       ok = status_back[i] && cv::norm(back[i] - p0[i]) <= params_.flow_back_px;
     if (!ok) continue;
+    const Track& old = prev_tracks_[i];
+    Eigen::Matrix2d A_patch = old.A_patch;
+    if (params_.align_first_patch && old.patch) {
+      AffineWarp warp{old.A_patch, toEigen(p1[i])};
+      const AlignResult r = alignAffine(*old.patch, image, warp);
+      if (!r.converged || r.zncc < params_.min_patch_zncc ||
+          (warp.t - toEigen(p1[i])).norm() > params_.max_patch_correction_px)
+        continue;
+      p1[i] = cv::Point2f(static_cast<float>(warp.t.x()), static_cast<float>(warp.t.y()));
+      if (!inBorder(p1[i])) continue;
+      A_patch = warp.A;
+    }
     Eigen::Vector2d xy;
     if (!cams_[0]->liftToNormalized(toEigen(p1[i]), xy)) continue;
-    const Track& old = prev_tracks_[i];
-    tracks.push_back({old.id, p1[i], xy, old.length + 1});
+    tracks.push_back({old.id, p1[i], xy, old.length + 1, old.patch, A_patch});
     prev_uv.push_back(toEigen(old.uv));
     prev_xy.push_back(old.xy);
   }
@@ -100,7 +111,12 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
   for (const auto& c : corners) {
     Eigen::Vector2d xy;
     if (!inBorder(c) || !cams_[0]->liftToNormalized(toEigen(c), xy)) continue;
-    tracks.push_back({next_id_++, c, xy, 1});
+    Track t{next_id_++, c, xy, 1, nullptr, Eigen::Matrix2d::Identity()};
+    if (params_.align_first_patch) {
+      auto patch = std::make_shared<PatchTemplate>(makePatchTemplate(image, toEigen(c), params_.patch_half));
+      if (patch->valid) t.patch = std::move(patch);
+    }
+    tracks.push_back(std::move(t));
     ++detected;
   }
 }
@@ -148,7 +164,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
 
   std::vector<Track> tracks;
   std::vector<Eigen::Vector2d> prev_uv, prev_xy;
-  trackPrevious(pyr, tracks, prev_uv, prev_xy);
+  trackPrevious(pyr, frame.left, tracks, prev_uv, prev_xy);
   out.tracked = tracks.size();
   // Eliminated tracks still followed skip the filter and the output (reported as removed below).
   std::vector<Track> followed;
@@ -172,6 +188,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
 
   // Rejection filter on tracked features (before the top-up, so holes refill now).
   double filter_ms = 0;
+  std::vector<Track> removed_tracks;  // tracks behind out.removed, in the same order
   FilterContext ctx{cams_[0].get(), &prior, mask, prev_t_ns_, frame.t_ns};
   auto runFilter = [&](std::vector<Track>& list, const std::vector<Eigen::Vector2d>* puv,
                        const std::vector<Eigen::Vector2d>* pxy, std::vector<Feature>& feats) {
@@ -196,6 +213,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
         Feature r = feats[i];
         r.label = FeatureLabel::kEliminated;
         out.removed.push_back(r);
+        removed_tracks.push_back(list[i]);
       } else {
         kept_tracks.push_back(list[i]);
         kept_feats.push_back(feats[i]);
@@ -213,11 +231,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   if (params_.keep_following_eliminated) {
     // Report the ones followed from earlier frames, then follow the newly removed ones too.
     for (const auto& t : followed) out.removed.push_back(featureOf(t, FeatureLabel::kEliminated));
-    for (std::size_t i = 0; i < out.rejected; ++i) {
-      const Feature& f = out.removed[i];
-      followed.push_back({f.id, cv::Point2f(static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y())), f.xy,
-                          f.track_length});
-    }
+    followed.insert(followed.end(), removed_tracks.begin(), removed_tracks.end());
     followed_.clear();
     for (const auto& t : followed) followed_.insert(t.id);
     tracks.insert(tracks.end(), followed.begin(), followed.end());  // they occupy their place in detectNew

@@ -13,6 +13,7 @@
 #include "core/measurements.h"
 #include "frontend/feature_filter.h"
 #include "frontend/feature_frame.h"
+#include "frontend/patch_alignment.h"
 #include "io/config.h"
 
 namespace idyvins::frontend {
@@ -31,6 +32,14 @@ struct TrackerParams {
   /// keep their place in the image so that no new corner is seeded on the same moving
   /// object (a fresh corner there would enter the estimator unscored for a frame).
   bool keep_following_eliminated = false;
+  /// After KLT, align each track's first-appearance patch (affine, gain/bias invariant)
+  /// to the new image and move the feature there: removes KLT's frame-to-frame drift.
+  /// Tracks whose patch no longer matches are dropped (slid along an edge, occluded,
+  /// on a depth discontinuity).
+  bool align_first_patch = true;
+  int patch_half = 7;                 ///< template of (2 half + 1)² px
+  double min_patch_zncc = 0.8;        ///< below: the track is dropped
+  double max_patch_correction_px = 2.0;  ///< KLT and alignment disagree by more: dropped
 };
 
 /// Tracks features across stereo frames; one instance per sequence.
@@ -53,9 +62,11 @@ class FeatureTracker {
     cv::Point2f uv;
     Eigen::Vector2d xy;
     int length;
+    std::shared_ptr<const PatchTemplate> patch;  ///< first appearance (null: not aligned)
+    Eigen::Matrix2d A_patch = Eigen::Matrix2d::Identity();  ///< current affine shape of the patch
   };
   static Feature featureOf(const Track& t, FeatureLabel label = FeatureLabel::kStatic);
-  void trackPrevious(const std::vector<cv::Mat>& pyr, std::vector<Track>& tracks,
+  void trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Mat& image, std::vector<Track>& tracks,
                      std::vector<Eigen::Vector2d>& prev_uv, std::vector<Eigen::Vector2d>& prev_xy);
   void detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected);
   void matchRight(const std::vector<cv::Mat>& left_pyr, const cv::Mat& right, std::vector<Feature>& features);

@@ -1,0 +1,120 @@
+#include "frontend/patch_alignment.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <cmath>
+
+namespace idyvins::frontend {
+
+namespace {
+
+/// Bilinear intensity of a CV_8UC1 image; false when (u, v) has no 2x2 neighbourhood.
+inline bool sample(const cv::Mat& image, double u, double v, float& out) {
+  if (!(u >= 0.0 && v >= 0.0 && u < image.cols - 1 && v < image.rows - 1)) return false;
+  const int x0 = static_cast<int>(u), y0 = static_cast<int>(v);
+  const float ax = static_cast<float>(u - x0), ay = static_cast<float>(v - y0);
+  const uchar* r0 = image.ptr<uchar>(y0) + x0;
+  const uchar* r1 = image.ptr<uchar>(y0 + 1) + x0;
+  out = (1 - ay) * ((1 - ax) * r0[0] + ax * r0[1]) + ay * ((1 - ax) * r1[0] + ax * r1[1]);
+  return true;
+}
+
+/// Zero mean, unit norm in place; false when the patch is (almost) flat.
+bool normalize(std::vector<float>& v) {
+  double mean = 0;
+  for (float x : v) mean += x;
+  mean /= static_cast<double>(v.size());
+  double ss = 0;
+  for (float& x : v) {
+    x = static_cast<float>(x - mean);
+    ss += static_cast<double>(x) * x;
+  }
+  // Below ~1 gray level of standard deviation there is nothing to align.
+  if (ss < static_cast<double>(v.size())) return false;
+  const float s = static_cast<float>(1.0 / std::sqrt(ss));
+  for (float& x : v) x *= s;
+  return true;
+}
+
+}  // namespace
+
+PatchTemplate makePatchTemplate(const cv::Mat& image, const Eigen::Vector2d& uv_center, int half) {
+  PatchTemplate tmpl;
+  tmpl.half = half;
+  const int n = 2 * half + 1, m = n + 2;  // with a 1 px margin for the gradients
+  std::vector<float> big(static_cast<std::size_t>(m) * m);
+  for (int r = 0; r < m; ++r)
+    for (int c = 0; c < m; ++c)
+      if (!sample(image, uv_center.x() + c - half - 1, uv_center.y() + r - half - 1, big[r * m + c])) return tmpl;
+  tmpl.values.resize(static_cast<std::size_t>(n) * n);
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) tmpl.values[r * n + c] = big[(r + 1) * m + c + 1];
+  // The normalization is affine in the intensities: apply the same scale to the gradients.
+  double mean = 0, ss = 0;
+  for (float x : tmpl.values) mean += x;
+  mean /= static_cast<double>(tmpl.values.size());
+  for (float x : tmpl.values) ss += (x - mean) * (x - mean);
+  if (!normalize(tmpl.values)) return tmpl;
+  const double scale = 1.0 / std::sqrt(ss);
+  tmpl.sd.resize(6 * tmpl.values.size());
+  Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) {
+      const double gx = 0.5 * scale * (big[(r + 1) * m + c + 2] - big[(r + 1) * m + c]);
+      const double gy = 0.5 * scale * (big[(r + 2) * m + c + 1] - big[r * m + c + 1]);
+      const double x = c - half, y = r - half;
+      Eigen::Matrix<double, 6, 1> s;
+      s << gx * x, gx * y, gy * x, gy * y, gx, gy;
+      H.noalias() += s * s.transpose();
+      for (int k = 0; k < 6; ++k) tmpl.sd[6 * (r * n + c) + k] = static_cast<float>(s[k]);
+    }
+  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
+  if (ldlt.info() != Eigen::Success || ldlt.vectorD().minCoeff() <= 1e-9 * ldlt.vectorD().maxCoeff()) return tmpl;
+  tmpl.H_inv = ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity());
+  tmpl.valid = true;
+  return tmpl;
+}
+
+AlignResult alignAffine(const PatchTemplate& tmpl, const cv::Mat& image, AffineWarp& warp,
+                        const AlignOptions& options) {
+  AlignResult res;
+  if (!tmpl.valid) return res;
+  const int half = tmpl.half, n = 2 * half + 1;
+  std::vector<float> warped(tmpl.values.size());
+  for (res.iterations = 1; res.iterations <= options.max_iterations; ++res.iterations) {
+    for (int r = 0; r < n; ++r)
+      for (int c = 0; c < n; ++c) {
+        const Eigen::Vector2d uv = warp.A * Eigen::Vector2d(c - half, r - half) + warp.t;
+        if (!sample(image, uv.x(), uv.y(), warped[r * n + c])) return res;
+      }
+    if (!normalize(warped)) return res;
+    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+    double zncc = 0;
+    for (std::size_t i = 0; i < warped.size(); ++i) {
+      const double e = warped[i] - tmpl.values[i];
+      zncc += static_cast<double>(warped[i]) * tmpl.values[i];
+      for (int k = 0; k < 6; ++k) b[k] += tmpl.sd[6 * i + k] * e;
+    }
+    res.zncc = zncc;
+    const Eigen::Matrix<double, 6, 1> dp = tmpl.H_inv * b;
+    Eigen::Matrix2d D;
+    D << 1.0 + dp[0], dp[1], dp[2], 1.0 + dp[3];
+    if (std::abs(D.determinant()) < 1e-6) return res;
+    // Inverse composition: W(x) <- W(W_dp^-1(x)).
+    const Eigen::Matrix2d A_new = warp.A * D.inverse();
+    const Eigen::Vector2d step = A_new * dp.tail<2>();
+    warp.A = A_new;
+    warp.t -= step;
+    const Eigen::Vector2d sv = Eigen::JacobiSVD<Eigen::Matrix2d>(warp.A).singularValues();
+    if (!(sv[1] > 1.0 / options.max_scale_change && sv[0] < options.max_scale_change)) return res;
+    if (step.norm() < options.epsilon_px) {
+      res.converged = true;
+      return res;
+    }
+  }
+  res.iterations = options.max_iterations;
+  return res;
+}
+
+}  // namespace idyvins::frontend

@@ -1,0 +1,88 @@
+// Affine alignment of a first-appearance patch (pure image math, no files).
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include "frontend/patch_alignment.h"
+
+namespace idyvins::frontend {
+namespace {
+
+/// Smooth random texture (blurred noise), CV_8UC1.
+cv::Mat texture(int seed, int size = 200) {
+  cv::Mat noise(size, size, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(noise, cv::RNG::UNIFORM, 0.0, 255.0);
+  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.0);
+  cv::normalize(noise, noise, 20, 235, cv::NORM_MINMAX);
+  cv::Mat out;
+  noise.convertTo(out, CV_8U);
+  return out;
+}
+
+/// The image seen after mapping every point p of `src` to A (p - c) + c + shift.
+cv::Mat warped(const cv::Mat& src, const Eigen::Matrix2d& A, const Eigen::Vector2d& c, const Eigen::Vector2d& shift) {
+  const Eigen::Vector2d b = c + shift - A * c;
+  cv::Mat M = (cv::Mat_<double>(2, 3) << A(0, 0), A(0, 1), b.x(), A(1, 0), A(1, 1), b.y());
+  cv::Mat out;
+  cv::warpAffine(src, out, M, src.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT);
+  return out;
+}
+
+TEST(PatchAlignment, RecoversAKnownAffineWarp) {
+  const cv::Mat image0 = texture(1);
+  const Eigen::Vector2d c(100, 100);
+  const PatchTemplate tmpl = makePatchTemplate(image0, c, 7);
+  ASSERT_TRUE(tmpl.valid);
+  Eigen::Matrix2d A;
+  A << 1.15, 0.08, -0.05, 0.95;  // scale, shear and a little rotation
+  const Eigen::Vector2d shift(3.3, -2.7);
+  const cv::Mat image1 = warped(image0, A, c, shift);
+  AffineWarp warp;
+  warp.t = c + shift + Eigen::Vector2d(1.2, -0.9);  // a drifted KLT position
+  const AlignResult r = alignAffine(tmpl, image1, warp);
+  ASSERT_TRUE(r.converged);
+  EXPECT_LT((warp.t - (c + shift)).norm(), 0.05);
+  EXPECT_LT((warp.A - A).cwiseAbs().maxCoeff(), 0.03);
+  EXPECT_GT(r.zncc, 0.98);
+}
+
+TEST(PatchAlignment, IsInvariantToGainAndBias) {
+  const cv::Mat image0 = texture(2);
+  const Eigen::Vector2d c(90.5, 110.25);  // subpixel centre
+  const PatchTemplate tmpl = makePatchTemplate(image0, c, 7);
+  cv::Mat brighter;
+  image0.convertTo(brighter, CV_8U, 0.7, 40.0);
+  AffineWarp warp;
+  warp.t = c + Eigen::Vector2d(-0.8, 0.6);
+  const AlignResult r = alignAffine(tmpl, brighter, warp);
+  ASSERT_TRUE(r.converged);
+  EXPECT_LT((warp.t - c).norm(), 0.05);
+  EXPECT_GT(r.zncc, 0.98);
+}
+
+TEST(PatchAlignment, ReportsAPatchThatNoLongerMatches) {
+  const cv::Mat image0 = texture(3), other = texture(4);
+  const Eigen::Vector2d c(100, 100);
+  const PatchTemplate tmpl = makePatchTemplate(image0, c, 7);
+  AffineWarp warp;
+  warp.t = c;
+  const AlignResult r = alignAffine(tmpl, other, warp);
+  EXPECT_FALSE(r.converged && r.zncc > 0.8);
+}
+
+TEST(PatchAlignment, RejectsFlatPatchesAndPatchesOffTheImage) {
+  const cv::Mat flat(100, 100, CV_8U, cv::Scalar(128));
+  EXPECT_FALSE(makePatchTemplate(flat, {50, 50}, 7).valid);
+  const cv::Mat image = texture(5, 100);
+  EXPECT_FALSE(makePatchTemplate(image, {5, 50}, 7).valid);
+  const PatchTemplate tmpl = makePatchTemplate(image, {50, 50}, 7);
+  ASSERT_TRUE(tmpl.valid);
+  AffineWarp warp;
+  warp.t = {97, 50};  // the warped patch leaves the image
+  EXPECT_FALSE(alignAffine(tmpl, image, warp).converged);
+}
+
+}  // namespace
+}  // namespace idyvins::frontend
