@@ -107,6 +107,9 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
   EXPECT_DOUBLE_EQ(c.T_b_c[0].translation().x(), 0.1);
   EXPECT_EQ(c.dynamic.mode, Mode::kRansac);
   EXPECT_DOUBLE_EQ(c.dynamic.lambda_dy, 5.0);
+  EXPECT_TRUE(c.dynamic.confirm_outliers);  // default
+  EXPECT_FALSE(loadConfig(writeConfig(dir, std::string(kConfig) + "confirm_outliers_dynamic: 0\n", kCamera))
+                   .dynamic.confirm_outliers);
   EXPECT_FALSE(c.estimate_td);
   EXPECT_DOUBLE_EQ(c.td_s, 0.0);
 }

@@ -98,6 +98,7 @@ int runRun(const RunArgs& a) {
   auto filter = makeFilter(mode, config);
   backend::EstimatorOptions est_options;
   est_options.candidate_weights = est_options.post_process = mode == Mode::kIdy || mode == Mode::kIdyBa;
+  est_options.confirm_outliers = est_options.post_process && config.dynamic.confirm_outliers;
   backend::Estimator estimator(config, est_options);
   auto* idy_filter = dynamic_cast<dynamic::IdyFilter*>(filter.get());
   std::vector<io::LabelledPoint> eliminated_points;
@@ -192,6 +193,7 @@ int runRun(const RunArgs& a) {
              {"eliminated", st.eliminated}, {"candidates", st.candidates},  {"cv_before", st.cv_before},
              {"cv_after", st.cv_after},   {"stop_rule", st.stop_rule},     {"d_s_hist", histogram(st.d_s)}, {"d_s_hist_kept", histogram(st.d_s_kept)},
              {"candidates_in_window", r.candidates}, {"confirmed_dynamic", r.confirmed_dynamic},
+             {"outliers_confirmed_dynamic", r.outliers_confirmed},
              {"cleared", r.cleared}};
       if (!st.prior_valid) ++frames_without_prior;
     }

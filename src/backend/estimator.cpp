@@ -439,6 +439,13 @@ void Estimator::removeOutliers(FrameResult& r) {
   std::vector<std::uint64_t>& bad = r.outlier_ids;
   for (const auto& [id, lm] : fm_.landmarks())
     if (lm.usable() && lm.obs.size() > 1 && meanReprojectionErrorPx(lm) > options_.outlier_px) bad.push_back(id);
+  if (options_.confirm_outliers) {
+    for (std::uint64_t id : bad) {
+      if (!dynamic_ids_.insert(id).second) continue;
+      ++r.outliers_confirmed;
+      if (mapped_.insert(id).second) dynamic_map_.push_back({landmarkWorld(fm_.landmarks().at(id)), 2, id});
+    }
+  }
   fm_.remove(bad);
 }
 

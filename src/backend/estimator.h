@@ -33,6 +33,10 @@ struct EstimatorOptions {
   /// DESIGN §4.6: confirm candidates as dynamic (leave the window) or clear them to static.
   bool post_process = false;
   int clear_after_observations = 4;  ///< a candidate that passes with this many observations becomes static
+  /// Extension of §4.6 (config `confirm_outliers_dynamic`): a landmark removed by the outlier
+  /// test is confirmed dynamic (its track is ignored from then on, dynamic map) instead of
+  /// coming back as a new landmark from its next observation.
+  bool confirm_outliers = false;
   /// Keep the oldest frame's yaw and position through each solve (backend/gauge.h).
   bool fix_gauge = true;
 };
@@ -58,6 +62,7 @@ struct FrameResult {
   int confirmed_dynamic = 0; ///< candidates confirmed dynamic after this solve
   int cleared = 0;           ///< candidates cleared to static after this solve
   std::vector<std::uint64_t> outlier_ids;  ///< landmarks removed by the outlier test after this solve
+  int outliers_confirmed = 0;  ///< of those, confirmed dynamic (EstimatorOptions::confirm_outliers)
   bool keyframe = false;
 };
 

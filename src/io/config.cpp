@@ -241,6 +241,8 @@ Config loadConfig(const std::string& path) {
 
   c.dynamic.lambda_dy = getDoubleOr(f, "lambda_dy", 4.0);
   c.dynamic.lambda_dy_c = getDoubleOr(f, "lambda_dy_c", 1.0);
+  if (f.root["confirm_outliers_dynamic"])
+    c.dynamic.confirm_outliers = getInt(f, f.root, "confirm_outliers_dynamic", "0 or 1") != 0;
   if (f.root["mode"]) {
     const std::string m = getString(f, f.root, "mode", modeNames());
     if (!parseMode(m, c.dynamic.mode))
@@ -281,7 +283,8 @@ std::string describe(const Config& c) {
     << " px\n";
   o << "  td: " << c.td_s << " s (estimate_td " << c.estimate_td << ")\n";
   o << "  mode: " << toString(c.dynamic.mode) << ", lambda_dy " << c.dynamic.lambda_dy
-    << " px^2, lambda_dy_c " << c.dynamic.lambda_dy_c << " px^2\n";
+    << " px^2, lambda_dy_c " << c.dynamic.lambda_dy_c << " px^2, outliers confirmed dynamic: "
+    << (c.dynamic.confirm_outliers ? "yes" : "no") << "\n";
   return o.str();
 }
 

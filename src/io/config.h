@@ -41,6 +41,11 @@ struct DynamicOptions {
   Mode mode = Mode::kIdy;
   double lambda_dy = 4.0;    ///< px^2, elimination threshold (eq. 4)
   double lambda_dy_c = 1.0;  ///< px^2, candidate threshold (eq. 6)
+  /// Session-5 extension of §4.6 (not in the paper): in the modes with post-processing, a
+  /// landmark that fails the 3 px outlier test is confirmed dynamic like a failing candidate
+  /// (its track leaves the window for good, dynamic map) instead of being dropped and
+  /// re-triangulated from its next observation. Config key `confirm_outliers_dynamic`.
+  bool confirm_outliers = true;
 };
 
 /// Whole-system configuration.
