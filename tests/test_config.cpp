@@ -112,6 +112,21 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
                    .dynamic.confirm_outliers);
   EXPECT_FALSE(c.estimate_td);
   EXPECT_DOUBLE_EQ(c.td_s, 0.0);
+  EXPECT_TRUE(c.dynamic.stereo_test);  // defaults of the stereo motion test
+  EXPECT_DOUBLE_EQ(c.dynamic.stereo_chi2, 18.47);
+  EXPECT_DOUBLE_EQ(c.dynamic.stereo_sigma_px, 0.25);
+  EXPECT_EQ(c.dynamic.stereo_strikes, 2);
+  const Config s = loadConfig(writeConfig(
+      dir,
+      std::string(kConfig) +
+          "stereo_motion_test: 0\nstereo_motion_chi2: 13.3\nstereo_motion_sigma_px: 0.4\nstereo_motion_strikes: 1\n",
+      kCamera));
+  EXPECT_FALSE(s.dynamic.stereo_test);
+  EXPECT_DOUBLE_EQ(s.dynamic.stereo_chi2, 13.3);
+  EXPECT_DOUBLE_EQ(s.dynamic.stereo_sigma_px, 0.4);
+  EXPECT_EQ(s.dynamic.stereo_strikes, 1);
+  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_sigma_px: 0\n", kCamera)); },
+              "stereo_motion_sigma_px");
 }
 
 TEST(Config, KannalaBrandtCamera) {

@@ -230,5 +230,163 @@ TEST(IdyFilter, EliminatesMovingAndMarksBorderlineFeatures) {
   EXPECT_FALSE(filter.lastStats().prior_valid);
 }
 
+// Stereo motion test (extension of §4.3): a rig with the right camera 0.11 m to the
+// right of the left one, like the simulator's.
+Eigen::Isometry3d rightFromLeft() {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Vector3d(-0.11, 0, 0);
+  return T;
+}
+
+struct StereoPair {
+  Vector2d l, r;
+};
+StereoPair observe(const Vector3d& p_left, const Eigen::Isometry3d& T_r_l) {
+  return {project(p_left), project(T_r_l * p_left)};
+}
+
+TEST(StereoMotionTest, StaticPointsGiveZeroAndNoiseGivesFourDof) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double sigma_px = 0.25;
+  std::normal_distribution<double> noise(0.0, sigma_px / kF);
+  const auto T_r_l = rightFromLeft();
+  double sum = 0;
+  int n = 0, above = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Motion m = randomMotion(rng);
+    const Vector3d p_prev(3 * u(rng), 2 * u(rng), 3 + 6 * (u(rng) + 1));
+    const Vector3d p_cur = m.R.transpose() * (p_prev - m.t);
+    const StereoPair a = observe(p_prev, T_r_l), b = observe(p_cur, T_r_l);
+    const StereoMotionError exact = stereoMotionError(a.l, a.r, b.l, b.r, T_r_l, m.R, m.t, 0.0, kF, sigma_px);
+    ASSERT_TRUE(exact.valid);
+    EXPECT_LT(exact.chi2, 1e-6);
+    EXPECT_NEAR(exact.depth, p_prev.z(), 1e-6 * p_prev.z());
+    auto nz = [&](const Vector2d& x) { return Vector2d(x + Vector2d(noise(rng), noise(rng))); };
+    const StereoMotionError e = stereoMotionError(nz(a.l), nz(a.r), nz(b.l), nz(b.r), T_r_l, m.R, m.t, 0.0, kF, sigma_px);
+    if (!e.valid) continue;
+    sum += e.chi2;
+    above += e.chi2 > 18.47;
+    ++n;
+  }
+  ASSERT_GT(n, 1900);
+  // The covariance is slightly conservative (2σ² for the previous left observation, which
+  // moves the prediction by about σ): the mean stays at or below the 4 of χ²₄.
+  EXPECT_GT(sum / n, 1.5);
+  EXPECT_LT(sum / n, 4.5);
+  EXPECT_LT(above, n / 200);  // χ²₄ 99.9 % quantile: well under 0.5 % above
+}
+
+TEST(StereoMotionTest, SeesMotionAlongTheEpipolarLineThatDsCannot) {
+  // The camera moves forward 0.5 m; a car 8 m ahead, 2 m to the side, drives away at
+  // 0.4 m per frame: parallel to the camera's motion, so it stays on its epipolar line.
+  const auto T_r_l = rightFromLeft();
+  const Matrix3d R = Matrix3d::Identity();
+  const Vector3d t(0, 0, 0.5);  // p_prev = R p_cur + t: the current camera is 0.5 m ahead
+  const Vector3d p_prev(2.0, 0.5, 8.0);
+  const Vector3d p_static_cur = R.transpose() * (p_prev - t);
+  const Vector3d p_moving_cur = R.transpose() * (p_prev + Vector3d(0, 0, 0.4) - t);
+  const StereoPair a = observe(p_prev, T_r_l), s = observe(p_static_cur, T_r_l), mv = observe(p_moving_cur, T_r_l);
+  EXPECT_LT(epipolarErrorPx2(a.l, mv.l, R, t, kF, kF), 1e-9);  // d_s: indistinguishable from static
+  const double sigma_p2 = 0.01 * 0.01;
+  const auto e_static = stereoMotionError(a.l, a.r, s.l, s.r, T_r_l, R, t, sigma_p2, kF, 0.25);
+  const auto e_moving = stereoMotionError(a.l, a.r, mv.l, mv.r, T_r_l, R, t, sigma_p2, kF, 0.25);
+  ASSERT_TRUE(e_moving.valid);
+  EXPECT_LT(e_static.chi2, 1e-6);
+  // Most of the 5 % depth change hides in the stereo depth noise (σ_ρ/ρ ≈ 7 % at 8 m);
+  // the rest is still far above the 99.9 % threshold of 18.47.
+  EXPECT_GT(e_moving.chi2, 50.0);
+  // The 0.4 m shift moves the image point by f ‖(x, y)‖ (1/z' - 1/z) = 380·√4.25·(1/7.5 - 1/7.9) px.
+  const double expected_px = kF * std::sqrt(4.25) * std::abs(1.0 / 7.9 - 1.0 / 7.5);
+  EXPECT_NEAR((mv.l - s.l).norm() * kF, expected_px, 1e-9);
+  EXPECT_GT(e_moving.residual_px2, expected_px * expected_px);  // left and right residuals
+  // A looser prior (σ_P = 0.5 m) explains part of it: χ² drops.
+  const auto e_loose = stereoMotionError(a.l, a.r, mv.l, mv.r, T_r_l, R, t, 0.25, kF, 0.25);
+  EXPECT_LT(e_loose.chi2, 0.1 * e_moving.chi2);
+  // Not triangulable (parallel rays with no baseline) → invalid, never flagged.
+  EXPECT_FALSE(stereoMotionError(a.l, a.r, s.l, s.r, Eigen::Isometry3d::Identity(), R, t, 0, kF, 0.25).valid);
+}
+
+TEST(IdyFilter, StereoTestMarksOnFirstFailureAndRemovesOnSecond) {
+  camera::CameraParams cp;
+  cp.fx = cp.fy = kF;
+  cp.cx = 376;
+  cp.cy = 240;
+  cp.width = 752;
+  cp.height = 480;
+  const auto cam = camera::makeCamera(cp);
+  const auto T_r_l = rightFromLeft();
+  frontend::MotionPrior prior;
+  prior.valid = true;
+  prior.t_prev_cur = Vector3d(0, 0, 0.5);
+  prior.cov_p = Matrix3d::Identity() * 1e-6;
+  IdyOptions o;
+  o.stereo_test = true;
+  o.stereo_sigma_px = 0.25;
+  o.T_r_l = T_r_l;
+  IdyFilter filter(o);
+  IdyOptions off = o;
+  off.stereo_test = false;
+  IdyFilter paper_only(off);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  // 60 static points and one car driving away along the view (feature id 0).
+  std::vector<Vector3d> points(61);
+  for (auto& p : points) p = Vector3d(4 * u(rng), 2 * u(rng), 6 + 4 * (u(rng) + 1));
+  points[0] = Vector3d(2.0, 0.5, 8.0);
+  auto frameItems = [&](std::vector<frontend::Feature>& feats, std::vector<frontend::FilterItem>& items) {
+    feats.assign(points.size(), {});
+    items.assign(points.size(), {});
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const Vector3d p_prev = points[i];
+      const Vector3d p_cur = p_prev + Vector3d(0, 0, i == 0 ? 0.4 : 0.0) - prior.t_prev_cur;
+      const StereoPair a = observe(p_prev, T_r_l), b = observe(p_cur, T_r_l);
+      feats[i].id = i;
+      feats[i].xy = b.l;
+      feats[i].has_right = true;
+      feats[i].xy_right = b.r;
+      items[i].feature = &feats[i];
+      items[i].tracked = true;
+      items[i].prev_xy = a.l;
+      items[i].prev_has_right = true;
+      items[i].prev_xy_right = a.r;
+    }
+    for (auto& p : points) p = p - prior.t_prev_cur + (&p == &points[0] ? Vector3d(0, 0, 0.4) : Vector3d::Zero());
+  };
+  frontend::FilterContext ctx{cam.get(), &prior, nullptr, 0, 50'000'000};
+  std::vector<frontend::Feature> feats;
+  std::vector<frontend::FilterItem> items;
+  const auto start = points;
+  frameItems(feats, items);
+  auto copy_items = items;
+  auto copy_feats = feats;
+  for (std::size_t i = 0; i < copy_items.size(); ++i) copy_items[i].feature = &copy_feats[i];
+  paper_only.apply(ctx, copy_items);  // the paper's test alone: the car passes as static
+  EXPECT_FALSE(copy_items[0].remove);
+  EXPECT_EQ(copy_feats[0].label, frontend::FeatureLabel::kStatic);
+  filter.apply(ctx, items);  // first failure: marked only
+  EXPECT_FALSE(items[0].remove);
+  EXPECT_EQ(feats[0].label, frontend::FeatureLabel::kCandidate);
+  EXPECT_GT(feats[0].stereo_chi2, o.stereo_chi2);
+  EXPECT_EQ(filter.lastStats().stereo_tested, points.size());
+  frameItems(feats, items);
+  filter.apply(ctx, items);  // second consecutive failure: removed
+  EXPECT_TRUE(items[0].remove);
+  EXPECT_EQ(feats[0].label, frontend::FeatureLabel::kEliminated);
+  EXPECT_EQ(filter.lastStats().stereo_eliminated, 1u);
+  for (std::size_t i = 1; i < items.size(); ++i) {
+    EXPECT_FALSE(items[i].remove) << i;
+    EXPECT_LT(feats[i].stereo_chi2, 1e-3) << i;
+  }
+  // Without a right match in the previous frame the feature is not tested.
+  points = start;
+  frameItems(feats, items);
+  items[0].prev_has_right = false;
+  IdyFilter fresh(o);
+  fresh.apply(ctx, items);
+  EXPECT_EQ(feats[0].stereo_chi2, -1);
+  EXPECT_EQ(fresh.lastStats().stereo_tested, points.size() - 1);
+}
+
 }  // namespace
 }  // namespace idyvins::dynamic

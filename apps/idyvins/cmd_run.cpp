@@ -36,8 +36,19 @@ std::unique_ptr<frontend::FeatureFilter> makeFilter(Mode mode, const Config& c) 
     case Mode::kRansac: return std::make_unique<frontend::RansacFilter>(c.tracker.f_threshold);
     case Mode::kSeg: return std::make_unique<frontend::SegFilter>();
     case Mode::kIdy:
-    case Mode::kIdyPre: return std::make_unique<dynamic::IdyFilter>(c.dynamic.lambda_dy, c.dynamic.lambda_dy_c, true);
-    case Mode::kIdyBa: return std::make_unique<dynamic::IdyFilter>(c.dynamic.lambda_dy, c.dynamic.lambda_dy_c, false);
+    case Mode::kIdyPre:
+    case Mode::kIdyBa: {
+      dynamic::IdyOptions o;
+      o.lambda_dy = c.dynamic.lambda_dy;
+      o.lambda_dy_c = c.dynamic.lambda_dy_c;
+      o.eliminate = mode != Mode::kIdyBa;
+      o.stereo_test = c.dynamic.stereo_test && c.num_cam == 2 && c.T_b_c.size() >= 2;
+      o.stereo_chi2 = c.dynamic.stereo_chi2;
+      o.stereo_sigma_px = c.dynamic.stereo_sigma_px;
+      o.stereo_strikes = c.dynamic.stereo_strikes;
+      if (o.stereo_test) o.T_r_l = c.T_b_c[1].inverse() * c.T_b_c[0];
+      return std::make_unique<dynamic::IdyFilter>(o);
+    }
     default: return nullptr;
   }
 }
@@ -59,11 +70,12 @@ void writeObservations(const std::string& path, const Records& observations, con
   for (const auto& p : estimator.staticMap()) in_static.insert(p.id);
   std::ofstream f(path);
   if (!f) throw InputError(path, "cannot write file");
-  f << "t_ns,id,u,v,track_length,frontend_label,d_s_px2,credibility,on_moving,confirmed_dynamic,in_static_map,outlier_removed\n";
+  f << "t_ns,id,u,v,track_length,frontend_label,d_s_px2,credibility,stereo_chi2,on_moving,confirmed_dynamic,in_static_map,"
+       "outlier_removed\n";
   static const char* kLabels[] = {"static", "candidate", "eliminated"};
   for (const auto& o : observations)
     f << o.t_ns << ',' << o.id << ',' << o.u << ',' << o.v << ',' << o.track_length << ','
-      << kLabels[static_cast<int>(o.label)] << ',' << o.d_s << ',' << o.credibility << ','
+      << kLabels[static_cast<int>(o.label)] << ',' << o.d_s << ',' << o.credibility << ',' << o.stereo_chi2 << ','
       << (has_masks ? (o.on_moving ? "1" : "0") : "") << ',' << confirmed.count(o.id) << ',' << in_static.count(o.id)
       << ',' << outlier_ids.count(o.id) << '\n';
   if (!f) throw InputError(path, "write failed");
@@ -112,7 +124,7 @@ int runRun(const RunArgs& a) {
     std::uint64_t id;
     bool on_moving;
     TimeNs t_ns;
-    float u, v, d_s, credibility;
+    float u, v, d_s, credibility, stereo_chi2;
     frontend::FeatureLabel label;
     int track_length;
   };
@@ -152,7 +164,8 @@ int runRun(const RunArgs& a) {
       const float cred = idy_filter ? static_cast<float>(idy_filter->lastStats().credibility) : 0.f;
       auto record = [&](const frontend::Feature& f) {
         observations.push_back({f.id, on_moving(f), frame.t_ns, static_cast<float>(f.uv.x()),
-                                static_cast<float>(f.uv.y()), static_cast<float>(f.score), cred, f.label,
+                                static_cast<float>(f.uv.y()), static_cast<float>(f.score), cred,
+                                static_cast<float>(f.stereo_chi2), f.label,
                                 f.track_length});
       };
       for (const auto& f : ff.features) record(f);
@@ -194,6 +207,7 @@ int runRun(const RunArgs& a) {
              {"cv_after", st.cv_after},   {"stop_rule", st.stop_rule},     {"d_s_hist", histogram(st.d_s)}, {"d_s_hist_kept", histogram(st.d_s_kept)},
              {"candidates_in_window", r.candidates}, {"confirmed_dynamic", r.confirmed_dynamic},
              {"outliers_confirmed_dynamic", r.outliers_confirmed},
+             {"stereo_tested", st.stereo_tested}, {"stereo_eliminated", st.stereo_eliminated},
              {"cleared", r.cleared}};
       if (!st.prior_valid) ++frames_without_prior;
     }

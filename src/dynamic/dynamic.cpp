@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <unordered_map>
 
 #include "core/so3.h"
 
@@ -49,6 +50,51 @@ double epipolarErrorPx2(const Vector2d& x0, const Vector2d& x1, const Matrix3d& 
   const double ab = a * a + b * b;
   if (ab < 1e-18) return 0.0;
   return e * e / ab;
+}
+
+StereoMotionError stereoMotionError(const Vector2d& x0_l, const Vector2d& x0_r, const Vector2d& x1_l,
+                                    const Vector2d& x1_r, const Eigen::Isometry3d& T_r_l, const Matrix3d& R,
+                                    const Vector3d& t, double sigma_p2, double focal, double sigma_px) {
+  StereoMotionError out;
+  const Matrix3d R_rl = T_r_l.linear();
+  const Vector3d t_rl = T_r_l.translation();
+  const double baseline = t_rl.norm();
+  if (baseline < 1e-9 || focal <= 0) return out;
+  // Depth along the left ray d from the right observation: x_r × (λ R_rl d + t_rl) = 0.
+  const Vector3d d(x0_l.x(), x0_l.y(), 1.0), xr(x0_r.x(), x0_r.y(), 1.0);
+  const Vector3d a = xr.cross(R_rl * d), b = xr.cross(t_rl);
+  if (a.squaredNorm() < 1e-18) return out;
+  const double lambda = -a.dot(b) / a.squaredNorm();
+  // Inverse depth, clamped to [1/1000 m, 1/0.1 m]: a negative disparity from noise is a far point.
+  const double rho = std::clamp(lambda > 0 ? 1.0 / lambda : 1e-3, 1e-3, 10.0);
+  bool ok = true;
+  auto residual = [&](double r_inv, const Vector3d& t_pc) {
+    Eigen::Matrix<double, 4, 1> r;
+    const Vector3d P1 = R.transpose() * (d / r_inv - t_pc);
+    const Vector3d Pr = R_rl * P1 + t_rl;
+    if (P1.z() < 0.05 || Pr.z() < 0.05) ok = false;
+    r.head<2>() = focal * (P1.head<2>() / P1.z() - x1_l);
+    r.tail<2>() = focal * (Pr.head<2>() / Pr.z() - x1_r);
+    return r;
+  };
+  const Eigen::Matrix<double, 4, 1> r = residual(rho, t);
+  if (!ok) return out;
+  const double h_rho = 1e-6 * rho, h_t = 1e-6;
+  const Eigen::Matrix<double, 4, 1> J_rho = (residual(rho + h_rho, t) - residual(rho - h_rho, t)) / (2 * h_rho);
+  Eigen::Matrix<double, 4, 3> J_t;
+  for (int i = 0; i < 3; ++i) {
+    const Vector3d e = Vector3d::Unit(i) * h_t;
+    J_t.col(i) = (residual(rho, t + e) - residual(rho, t - e)) / (2 * h_t);
+  }
+  if (!ok) return out;
+  const double sigma_rho = std::sqrt(2.0) * sigma_px / (focal * baseline);
+  const Eigen::Matrix4d C = 2.0 * sigma_px * sigma_px * Eigen::Matrix4d::Identity() +
+                            sigma_rho * sigma_rho * J_rho * J_rho.transpose() + sigma_p2 * J_t * J_t.transpose();
+  out.valid = true;
+  out.chi2 = r.dot(C.ldlt().solve(r));
+  out.residual_px2 = r.squaredNorm();
+  out.depth = 1.0 / rho;
+  return out;
 }
 
 const char* toString(StopRule rule) {
@@ -134,8 +180,8 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
   }
   stats_.d_s = ds;
   std::vector<bool> removed(tracked.size(), false);
-  if (eliminate_) {
-    const Elimination e = eliminate(ds, lambda_dy_);
+  if (o_.eliminate) {
+    const Elimination e = eliminate(ds, o_.lambda_dy);
     stats_.cv_before = e.cv_before;
     stats_.cv_after = e.cv_after;
     stats_.stop_rule = toString(e.stop);
@@ -152,10 +198,43 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
   for (std::size_t k = 0; k < tracked.size(); ++k)
     if (!removed[k]) stats_.d_s_kept.push_back(ds[k]);
   for (std::size_t k = 0; k < tracked.size(); ++k) {
-    if (removed[k] || raw[k] <= lambda_c_) continue;
+    if (removed[k] || raw[k] <= o_.lambda_dy_c) continue;
     items[tracked[k]].feature->label = frontend::FeatureLabel::kCandidate;
     ++stats_.candidates;
   }
+  if (!o_.stereo_test) return;
+  const double sigma_p2 = std::max(0.0, ctx.prior->cov_p.trace()) / 3.0;
+  std::unordered_map<std::uint64_t, int> strikes;  // consecutive failures, of the features seen now
+  for (std::size_t k = 0; k < tracked.size(); ++k) {
+    auto& it = items[tracked[k]];
+    if (removed[k] || !it.prev_has_right || !it.feature->has_right) continue;
+    ++stats_.stereo_tested;
+    const StereoMotionError e = stereoMotionError(it.prev_xy, it.prev_xy_right, it.feature->xy, it.feature->xy_right,
+                                                  o_.T_r_l, R, ctx.prior->t_prev_cur, sigma_p2, fx, o_.stereo_sigma_px);
+    if (!e.valid) continue;
+    it.feature->stereo_chi2 = e.chi2;
+    if (e.chi2 <= o_.stereo_chi2) continue;
+    auto s = stereo_strikes_.find(it.feature->id);
+    const int n = (s == stereo_strikes_.end() ? 0 : s->second) + 1;
+    strikes[it.feature->id] = n;
+    if (n < o_.stereo_strikes) {  // a first failure only marks (one bad match is not motion)
+      if (it.feature->label != frontend::FeatureLabel::kCandidate) {
+        it.feature->label = frontend::FeatureLabel::kCandidate;
+        ++stats_.candidates;
+      }
+      continue;
+    }
+    ++stats_.stereo_eliminated;
+    if (o_.eliminate) {
+      it.remove = true;
+      it.feature->label = frontend::FeatureLabel::kEliminated;
+      ++stats_.eliminated;
+    } else if (it.feature->label != frontend::FeatureLabel::kCandidate) {
+      it.feature->label = frontend::FeatureLabel::kCandidate;
+      ++stats_.candidates;
+    }
+  }
+  stereo_strikes_ = std::move(strikes);
 }
 
 }  // namespace idyvins::dynamic

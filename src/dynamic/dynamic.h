@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "camera/camera_params.h"
@@ -33,6 +34,30 @@ double credibility(const frontend::MotionPrior& prior);
 /// are undistorted normalized coordinates; fx, fy scale them to pixels. 0 if degenerate.
 double epipolarErrorPx2(const Eigen::Vector2d& x0, const Eigen::Vector2d& x1, const Eigen::Matrix3d& R_prev_cur,
                         const Eigen::Vector3d& t_prev_cur, double fx, double fy);
+
+/// Extension of §4.3 (not in the paper): the stereo motion test. The paper's d_s is the
+/// projection error minimized over the whole epipolar line, i.e. over every depth, so
+/// motion along the line (traffic moving parallel to the camera's own motion) is invisible
+/// to it. With a right match in both frames the depth is known up to the stereo noise:
+/// the point triangulated in frame k is moved by the prior into frame k+1 and projected
+/// into both cameras; the 4-vector of pixel residuals r is weighed by its covariance
+/// C = 2 σ_px² I + σ_ρ² J_ρ J_ρᵀ + σ_P² J_t J_tᵀ (measurement noise of the two frames;
+/// inverse depth ρ with σ_ρ = √2 σ_px / (f b); the prior's position, σ_P² = trace cov_p / 3;
+/// J_ρ, J_t by central differences). chi2 = rᵀ C⁻¹ r (χ², 4 dof, for a static point).
+struct StereoMotionError {
+  bool valid = false;   ///< false: not triangulable in front of both cameras
+  double chi2 = 0;      ///< rᵀ C⁻¹ r
+  double residual_px2 = 0;  ///< ‖r‖²
+  double depth = 0;     ///< triangulated depth in frame k (m)
+};
+
+/// x0_l, x0_r: left / right normalized coordinates in frame k; x1_l, x1_r: in frame k+1.
+/// T_r_l maps left-camera points into the right camera; (R, t)_prev_cur as in MotionPrior.
+StereoMotionError stereoMotionError(const Eigen::Vector2d& x0_l, const Eigen::Vector2d& x0_r,
+                                    const Eigen::Vector2d& x1_l, const Eigen::Vector2d& x1_r,
+                                    const Eigen::Isometry3d& T_r_l, const Eigen::Matrix3d& R_prev_cur,
+                                    const Eigen::Vector3d& t_prev_cur, double sigma_p2, double focal,
+                                    double sigma_px);
 
 /// Information scale of a candidate observation (DESIGN §4.5): 1 / m_j with m_j
 /// (px², minimum projection error to the first window observation) floored at 1 px².
@@ -63,22 +88,41 @@ struct FrameStats {
   std::string stop_rule;
   std::vector<double> d_s;       ///< per tracked feature (px²), before elimination
   std::vector<double> d_s_kept;  ///< the ones left after elimination
+  std::size_t stereo_tested = 0;      ///< features with a right match in both frames (stereo test)
+  std::size_t stereo_eliminated = 0;  ///< of those, removed (or marked, idy-ba) by the stereo test
+};
+
+/// Options of the `idy` filter (config keys in brackets).
+struct IdyOptions {
+  double lambda_dy = 4.0;    ///< px², elimination threshold (lambda_dy)
+  double lambda_dy_c = 1.0;  ///< px², candidate threshold (lambda_dy_c)
+  bool eliminate = true;     ///< false in mode idy-ba: only mark
+  /// Stereo motion test (extension, stereo_motion_test): off when T_r_l is unset.
+  bool stereo_test = false;
+  double stereo_chi2 = 18.47;  ///< χ²₄ at 99.9 % (stereo_motion_chi2)
+  double stereo_sigma_px = 0.25;  ///< σ of one KLT / stereo match (stereo_motion_sigma_px)
+  /// Consecutive failures before a feature is removed (stereo_motion_strikes); an
+  /// earlier failure marks it as a candidate.
+  int stereo_strikes = 2;
+  Eigen::Isometry3d T_r_l = Eigen::Isometry3d::Identity();  ///< left camera -> right camera
 };
 
 /// The `idy` front-end filter: d_s per tracked feature from the motion prior,
 /// elimination (remove), marking (label kCandidate). Frames without a valid prior
-/// pass unfiltered. With eliminate = false (mode idy-ba) it only marks.
+/// pass unfiltered. With eliminate = false (mode idy-ba) it only marks. With the stereo
+/// test on, features that fail it are removed (idy, idy-pre) or marked (idy-ba) too.
 class IdyFilter final : public frontend::FeatureFilter {
  public:
+  explicit IdyFilter(const IdyOptions& options) : o_(options) {}
   IdyFilter(double lambda_dy, double lambda_dy_c, bool eliminate = true)
-      : lambda_dy_(lambda_dy), lambda_c_(lambda_dy_c), eliminate_(eliminate) {}
+      : IdyFilter(IdyOptions{lambda_dy, lambda_dy_c, eliminate}) {}
   void apply(const frontend::FilterContext& context, std::vector<frontend::FilterItem>& items) override;
   const FrameStats& lastStats() const { return stats_; }
 
  private:
-  double lambda_dy_, lambda_c_;
-  bool eliminate_;
+  IdyOptions o_;
   FrameStats stats_;
+  std::unordered_map<std::uint64_t, int> stereo_strikes_;  ///< id -> consecutive stereo-test failures
 };
 
 }  // namespace idyvins::dynamic

@@ -17,6 +17,9 @@ struct FilterItem {
   Feature* feature = nullptr;  ///< current observation (label and score may be set)
   bool tracked = false;        ///< has a previous observation
   Eigen::Vector2d prev_uv = Eigen::Vector2d::Zero(), prev_xy = Eigen::Vector2d::Zero();
+  bool prev_has_right = false;                           ///< previous observation had a right match
+  Eigen::Vector2d prev_xy_right = Eigen::Vector2d::Zero();  ///< its right normalized coordinates
+  // The current observation's right match (feature->has_right, xy_right) is set before the filter.
   bool remove = false;         ///< set by the filter: drop the feature (it stops being tracked)
 };
 

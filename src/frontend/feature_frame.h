@@ -25,6 +25,7 @@ struct Feature {
   int track_length = 1;  ///< frames this id has been tracked (1 = new)
   FeatureLabel label = FeatureLabel::kStatic;
   double score = 0;      ///< filter's per-feature score (IDY: d_s, px²), 0 if none
+  double stereo_chi2 = -1;  ///< IDY stereo motion test's χ² (4 dof), -1 if not tested
 };
 
 /// The front end's output for one frame.

@@ -47,7 +47,7 @@ bool FeatureTracker::inBorder(const cv::Point2f& p) const {
 }
 
 void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Mat& image, std::vector<Track>& tracks,
-                                   std::vector<Eigen::Vector2d>& prev_uv, std::vector<Eigen::Vector2d>& prev_xy) {
+                                   std::vector<PrevObs>& prev) {
   if (prev_pyr_.empty() || prev_tracks_.empty()) return;
   std::vector<cv::Point2f> p0, p1, back;
   for (const auto& t : prev_tracks_) p0.push_back(t.uv);
@@ -81,8 +81,7 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Ma
     Eigen::Vector2d xy;
     if (!cams_[0]->liftToNormalized(toEigen(p1[i]), xy)) continue;
     tracks.push_back({old.id, p1[i], xy, old.length + 1, old.patch, A_patch});
-    prev_uv.push_back(toEigen(old.uv));
-    prev_xy.push_back(old.xy);
+    prev.push_back({toEigen(old.uv), old.xy, old.has_right, old.xy_right});
   }
 }
 
@@ -111,7 +110,7 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
   for (const auto& c : corners) {
     Eigen::Vector2d xy;
     if (!inBorder(c) || !cams_[0]->liftToNormalized(toEigen(c), xy)) continue;
-    Track t{next_id_++, c, xy, 1, nullptr, Eigen::Matrix2d::Identity()};
+    Track t{next_id_++, c, xy, 1, nullptr, Eigen::Matrix2d::Identity(), false, Eigen::Vector2d::Zero()};
     if (params_.align_first_patch) {
       auto patch = std::make_shared<PatchTemplate>(makePatchTemplate(image, toEigen(c), params_.patch_half));
       if (patch->valid) t.patch = std::move(patch);
@@ -121,13 +120,21 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
   }
 }
 
-void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, const cv::Mat& right,
-                                std::vector<Feature>& features) {
-  if (features.empty() || right.empty() || cams_.size() < 2) return;
+void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vector<Feature>& features,
+                                const std::vector<std::size_t>* which) {
+  if (right_pyr_.empty() || cams_.size() < 2) return;
+  std::vector<std::size_t> all;
+  if (!which) {
+    all.resize(features.size());
+    std::iota(all.begin(), all.end(), 0);
+    which = &all;
+  }
+  if (which->empty()) return;
   const cv::Size win(params_.klt_window, params_.klt_window);
   const std::vector<cv::Mat>& right_pyr = right_pyr_;  // built once per frame in track()
   std::vector<cv::Point2f> pl, pr, back;
-  for (const auto& f : features) pl.emplace_back(static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y()));
+  for (std::size_t j : *which)
+    pl.emplace_back(static_cast<float>(features[j].uv.x()), static_cast<float>(features[j].uv.y()));
   std::vector<uchar> status, status_back;
   std::vector<float> err;
   cv::calcOpticalFlowPyrLK(left_pyr, right_pyr, pl, pr, status, err, win, params_.klt_levels);
@@ -138,19 +145,21 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, const cv::
                              cv::OPTFLOW_USE_INITIAL_FLOW);
   }
   const double f = cams_[1]->focal();
-  for (std::size_t i = 0; i < features.size(); ++i) {
+  for (std::size_t i = 0; i < which->size(); ++i) {
+    Feature& feat = features[(*which)[i]];
+    feat.has_right = false;
     bool ok = status[i] && inBorder(pr[i]);
     if (ok && config_.tracker.flow_back) ok = status_back[i] && cv::norm(back[i] - pl[i]) <= params_.flow_back_px;
     Eigen::Vector2d xy_r;
     if (!ok || !cams_[1]->liftToNormalized(toEigen(pr[i]), xy_r)) continue;
     // Epipolar check with the known extrinsics (distance to the line, in pixels).
-    const Eigen::Vector3d x0(features[i].xy.x(), features[i].xy.y(), 1.0), x1(xy_r.x(), xy_r.y(), 1.0);
+    const Eigen::Vector3d x0(feat.xy.x(), feat.xy.y(), 1.0), x1(xy_r.x(), xy_r.y(), 1.0);
     const Eigen::Vector3d line = E_c1_c0_ * x0;
     const double dist = std::abs(x1.dot(line)) / std::max(line.head<2>().norm(), 1e-12);
     if (dist * f > params_.stereo_epipolar_px) continue;
-    features[i].has_right = true;
-    features[i].uv_right = toEigen(pr[i]);
-    features[i].xy_right = xy_r;
+    feat.has_right = true;
+    feat.uv_right = toEigen(pr[i]);
+    feat.xy_right = xy_r;
   }
 }
 
@@ -162,27 +171,32 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   std::vector<cv::Mat>& pyr = cur_pyr_;
   cv::buildOpticalFlowPyramid(frame.left, pyr, cv::Size(params_.klt_window, params_.klt_window), params_.klt_levels);
 
+  // Right pyramid first: tracked features are matched in the right image before the
+  // filter (a filter may compare stereo observations of consecutive frames).
+  right_pyr_.clear();
+  if (!frame.right.empty() && cams_.size() >= 2)
+    cv::buildOpticalFlowPyramid(frame.right, right_pyr_, cv::Size(params_.klt_window, params_.klt_window),
+                                params_.klt_levels);
+
   std::vector<Track> tracks;
-  std::vector<Eigen::Vector2d> prev_uv, prev_xy;
-  trackPrevious(pyr, frame.left, tracks, prev_uv, prev_xy);
+  std::vector<PrevObs> prev;
+  trackPrevious(pyr, frame.left, tracks, prev);
   out.tracked = tracks.size();
   // Eliminated tracks still followed skip the filter and the output (reported as removed below).
   std::vector<Track> followed;
   if (!followed_.empty()) {
     std::vector<Track> rest;
-    std::vector<Eigen::Vector2d> rest_uv, rest_xy;
+    std::vector<PrevObs> rest_prev;
     for (std::size_t i = 0; i < tracks.size(); ++i) {
       if (followed_.count(tracks[i].id)) {
         followed.push_back(tracks[i]);
         continue;
       }
       rest.push_back(tracks[i]);
-      rest_uv.push_back(prev_uv[i]);
-      rest_xy.push_back(prev_xy[i]);
+      rest_prev.push_back(prev[i]);
     }
     tracks = std::move(rest);
-    prev_uv = std::move(rest_uv);
-    prev_xy = std::move(rest_xy);
+    prev = std::move(rest_prev);
   }
   const double dt = prev_pyr_.empty() ? 0.0 : toSeconds(frame.t_ns - prev_t_ns_);
 
@@ -190,19 +204,22 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   double filter_ms = 0;
   std::vector<Track> removed_tracks;  // tracks behind out.removed, in the same order
   FilterContext ctx{cams_[0].get(), &prior, mask, prev_t_ns_, frame.t_ns};
-  auto runFilter = [&](std::vector<Track>& list, const std::vector<Eigen::Vector2d>* puv,
-                       const std::vector<Eigen::Vector2d>* pxy, std::vector<Feature>& feats) {
+  auto runFilter = [&](std::vector<Track>& list, const std::vector<PrevObs>* prev_obs, std::vector<Feature>& feats) {
     feats.clear();
     for (const auto& t : list) feats.push_back(featureOf(t));
+    if (prev_obs) matchRight(pyr, feats);  // tracked: right match now; new corners: after the top-up
     if (!filter) return;
     const auto t0 = Clock::now();
     std::vector<FilterItem> items(feats.size());
     for (std::size_t i = 0; i < feats.size(); ++i) {
       items[i].feature = &feats[i];
-      items[i].tracked = puv != nullptr;
-      if (puv) {
-        items[i].prev_uv = (*puv)[i];
-        items[i].prev_xy = (*pxy)[i];
+      items[i].tracked = prev_obs != nullptr;
+      if (prev_obs) {
+        const PrevObs& p = (*prev_obs)[i];
+        items[i].prev_uv = p.uv;
+        items[i].prev_xy = p.xy;
+        items[i].prev_has_right = p.has_right;
+        items[i].prev_xy_right = p.xy_right;
       }
     }
     filter->apply(ctx, items);
@@ -224,7 +241,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
     filter_ms += msSince(t0);
   };
   std::vector<Feature> tracked_feats;
-  runFilter(tracks, &prev_uv, &prev_xy, tracked_feats);
+  runFilter(tracks, &prev, tracked_feats);
   std::unordered_map<std::uint64_t, Feature> carried;  // id -> feature as the filter labelled it
   for (const auto& f : tracked_feats) carried.emplace(f.id, f);
   out.rejected = out.removed.size();
@@ -242,7 +259,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   for (const auto& t : tracks)
     if (t.length == 1) fresh.push_back(t);
   std::vector<Feature> fresh_feats;
-  runFilter(fresh, nullptr, nullptr, fresh_feats);  // seg may remove new corners on moving objects
+  runFilter(fresh, nullptr, fresh_feats);  // seg may remove new corners on moving objects
   std::unordered_map<std::uint64_t, bool> fresh_kept;
   for (const auto& f : fresh_feats) fresh_kept[f.id] = true;
 
@@ -267,11 +284,22 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
       if (it != prev_pos.end()) f.velocity_px = (f.uv - toEigen(it->second)) / dt;
     }
   }
-  if (!frame.right.empty() && cams_.size() >= 2)
-    cv::buildOpticalFlowPyramid(frame.right, right_pyr_, cv::Size(params_.klt_window, params_.klt_window),
-                                params_.klt_levels);
-  matchRight(pyr, frame.right, out.features);
-  matchRight(pyr, frame.right, out.removed);  // removed features may go to the dynamic map
+  // New corners, and eliminated tracks followed from earlier frames (removed features may
+  // go to the dynamic map); tracked features were matched before the filter.
+  std::vector<std::size_t> new_idx, followed_idx;
+  for (std::size_t i = 0; i < out.features.size(); ++i)
+    if (out.features[i].track_length == 1) new_idx.push_back(i);
+  for (std::size_t i = out.rejected; i < out.removed.size(); ++i) followed_idx.push_back(i);
+  matchRight(pyr, out.features, &new_idx);
+  matchRight(pyr, out.removed, &followed_idx);
+  std::unordered_map<std::uint64_t, const Feature*> by_id;  // this frame's observation of each kept track
+  for (const auto& f : out.features) by_id.emplace(f.id, &f);
+  for (const auto& f : out.removed) by_id.emplace(f.id, &f);
+  for (auto& t : final_tracks) {
+    auto it = by_id.find(t.id);
+    t.has_right = it != by_id.end() && it->second->has_right;
+    t.xy_right = t.has_right ? it->second->xy_right : Eigen::Vector2d::Zero();
+  }
 
   std::swap(prev_pyr_, cur_pyr_);  // keep both pyramids' buffers for the next frame
   prev_tracks_ = std::move(final_tracks);

@@ -64,12 +64,22 @@ class FeatureTracker {
     int length;
     std::shared_ptr<const PatchTemplate> patch;  ///< first appearance (null: not aligned)
     Eigen::Matrix2d A_patch = Eigen::Matrix2d::Identity();  ///< current affine shape of the patch
+    bool has_right = false;                                 ///< right match in this track's frame
+    Eigen::Vector2d xy_right = Eigen::Vector2d::Zero();
+  };
+  /// A track's observation in the previous frame.
+  struct PrevObs {
+    Eigen::Vector2d uv, xy;
+    bool has_right;
+    Eigen::Vector2d xy_right;
   };
   static Feature featureOf(const Track& t, FeatureLabel label = FeatureLabel::kStatic);
   void trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Mat& image, std::vector<Track>& tracks,
-                     std::vector<Eigen::Vector2d>& prev_uv, std::vector<Eigen::Vector2d>& prev_xy);
+                     std::vector<PrevObs>& prev);
   void detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected);
-  void matchRight(const std::vector<cv::Mat>& left_pyr, const cv::Mat& right, std::vector<Feature>& features);
+  /// Matches features[i] for i in `which` (all when null) in the right image.
+  void matchRight(const std::vector<cv::Mat>& left_pyr, std::vector<Feature>& features,
+                  const std::vector<std::size_t>* which = nullptr);
   bool inBorder(const cv::Point2f& p) const;
 
   Config config_;

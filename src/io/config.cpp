@@ -243,6 +243,16 @@ Config loadConfig(const std::string& path) {
   c.dynamic.lambda_dy_c = getDoubleOr(f, "lambda_dy_c", 1.0);
   if (f.root["confirm_outliers_dynamic"])
     c.dynamic.confirm_outliers = getInt(f, f.root, "confirm_outliers_dynamic", "0 or 1") != 0;
+  if (f.root["stereo_motion_test"])
+    c.dynamic.stereo_test = getInt(f, f.root, "stereo_motion_test", "0 or 1") != 0;
+  c.dynamic.stereo_chi2 = getDoubleOr(f, "stereo_motion_chi2", c.dynamic.stereo_chi2);
+  c.dynamic.stereo_sigma_px = getDoubleOr(f, "stereo_motion_sigma_px", c.dynamic.stereo_sigma_px);
+  if (f.root["stereo_motion_strikes"]) {
+    c.dynamic.stereo_strikes = getInt(f, f.root, "stereo_motion_strikes", "consecutive failures, >= 1");
+    checkPositive(f, "stereo_motion_strikes", c.dynamic.stereo_strikes);
+  }
+  checkPositive(f, "stereo_motion_chi2", c.dynamic.stereo_chi2);
+  checkPositive(f, "stereo_motion_sigma_px", c.dynamic.stereo_sigma_px);
   if (f.root["mode"]) {
     const std::string m = getString(f, f.root, "mode", modeNames());
     if (!parseMode(m, c.dynamic.mode))
@@ -285,6 +295,8 @@ std::string describe(const Config& c) {
   o << "  mode: " << toString(c.dynamic.mode) << ", lambda_dy " << c.dynamic.lambda_dy
     << " px^2, lambda_dy_c " << c.dynamic.lambda_dy_c << " px^2, outliers confirmed dynamic: "
     << (c.dynamic.confirm_outliers ? "yes" : "no") << "\n";
+  o << "  stereo motion test: " << (c.dynamic.stereo_test ? "on" : "off") << " (chi2 " << c.dynamic.stereo_chi2
+    << ", sigma " << c.dynamic.stereo_sigma_px << " px, " << c.dynamic.stereo_strikes << " strikes)\n";
   return o.str();
 }
 

@@ -46,6 +46,13 @@ struct DynamicOptions {
   /// (its track leaves the window for good, dynamic map) instead of being dropped and
   /// re-triangulated from its next observation. Config key `confirm_outliers_dynamic`.
   bool confirm_outliers = true;
+  /// Extension of §4.3 (not in the paper): the stereo motion test (dynamic::stereoMotionError)
+  /// catches motion along the epipolar line, which d_s cannot see. Config keys
+  /// `stereo_motion_test` (0/1), `stereo_motion_chi2`, `stereo_motion_sigma_px`.
+  bool stereo_test = true;
+  double stereo_chi2 = 18.47;    ///< χ²₄ at 99.9 %
+  double stereo_sigma_px = 0.25; ///< px, one KLT / stereo match
+  int stereo_strikes = 2;        ///< consecutive failures before removal
 };
 
 /// Whole-system configuration.
