@@ -30,6 +30,17 @@ Motion randomMotion(std::mt19937& rng) {
 
 Vector2d project(const Vector3d& p) { return p.head<2>() / p.z(); }
 
+/// The simulator's left camera (752x480, f = 380 px, no distortion).
+std::unique_ptr<camera::CameraModel> pinholeCamera() {
+  camera::CameraParams cp;
+  cp.fx = cp.fy = kF;
+  cp.cx = 376;
+  cp.cy = 240;
+  cp.width = 752;
+  cp.height = 480;
+  return camera::makeCamera(cp);
+}
+
 TEST(MinProjectionError, StaticPointsGiveZero) {
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -178,13 +189,7 @@ TEST(IdyFilter, EliminatesMovingAndMarksBorderlineFeatures) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::normal_distribution<double> noise(0.0, 0.3 / kF);
   const Motion m = randomMotion(rng);
-  camera::CameraParams cp;
-  cp.fx = cp.fy = kF;
-  cp.cx = 376;
-  cp.cy = 240;
-  cp.width = 752;
-  cp.height = 480;
-  const auto cam = camera::makeCamera(cp);
+  const auto cam = pinholeCamera();
   frontend::MotionPrior prior;
   prior.valid = true;
   prior.q_prev_cur = Eigen::Quaterniond(m.R);
@@ -308,13 +313,7 @@ TEST(StereoMotionTest, SeesMotionAlongTheEpipolarLineThatDsCannot) {
 }
 
 TEST(IdyFilter, StereoTestMarksOnFirstFailureAndRemovesOnSecond) {
-  camera::CameraParams cp;
-  cp.fx = cp.fy = kF;
-  cp.cx = 376;
-  cp.cy = 240;
-  cp.width = 752;
-  cp.height = 480;
-  const auto cam = camera::makeCamera(cp);
+  const auto cam = pinholeCamera();
   const auto T_r_l = rightFromLeft();
   frontend::MotionPrior prior;
   prior.valid = true;

@@ -122,7 +122,7 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
 
 void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vector<Feature>& features,
                                 const std::vector<std::size_t>* which) {
-  if (right_pyr_.empty() || cams_.size() < 2) return;
+  if (!has_right_image_) return;
   std::vector<std::size_t> all;
   if (!which) {
     all.resize(features.size());
@@ -173,8 +173,8 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
 
   // Right pyramid first: tracked features are matched in the right image before the
   // filter (a filter may compare stereo observations of consecutive frames).
-  right_pyr_.clear();
-  if (!frame.right.empty() && cams_.size() >= 2)
+  has_right_image_ = !frame.right.empty() && cams_.size() >= 2;
+  if (has_right_image_)
     cv::buildOpticalFlowPyramid(frame.right, right_pyr_, cv::Size(params_.klt_window, params_.klt_window),
                                 params_.klt_levels);
 

@@ -87,6 +87,7 @@ class FeatureTracker {
   std::vector<std::unique_ptr<camera::CameraModel>> cams_;
   Eigen::Matrix3d E_c1_c0_;  ///< essential matrix: x1ᵀ E x0 = 0
   std::vector<cv::Mat> prev_pyr_, cur_pyr_, right_pyr_;  ///< reused across frames (no per-frame allocation)
+  bool has_right_image_ = false;  ///< right_pyr_ holds the current frame's right image
   cv::Mat detect_mask_;
   std::vector<Track> prev_tracks_;
   std::unordered_set<std::uint64_t> followed_;  ///< eliminated tracks still followed (keep_following_eliminated)
