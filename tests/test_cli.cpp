@@ -8,7 +8,9 @@
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
+#include <vector>
 
 #include "test_util.h"
 
@@ -105,6 +107,70 @@ TEST(Cli, SimulateWritesADatasetThatInfoValidates) {
   ASSERT_EQ(track.code, 0) << track.out;
   EXPECT_NE(track.out.find("11 frames, mode seg"), std::string::npos) << track.out;
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir / "tracks"), std::filesystem::directory_iterator{}), 11);
+}
+
+TEST(Cli, RunIdyWritesOutputsAndObservationDump) {
+  // 4 s of city high (trucks overtaking the drone): `run --mode idy` end to end.
+  idyvins::test::TempDir dir;
+  const Result sim = run("simulate --scene city --level high --duration 4 --out " + (dir / "ds"));
+  ASSERT_EQ(sim.code, 0) << sim.out;
+  const std::string cfg = dir / "ds/config/sim_stereo_imu_config.yaml";
+  const Result r = run("run --config " + cfg + " --dataset " + (dir / "ds") + " --out " + (dir / "out") +
+                       " --mode idy --dump-observations " + (dir / "obs.csv"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("mode idy"), std::string::npos) << r.out;
+  for (const char* f : {"trajectory.tum", "trajectory.csv", "state.csv", "stats.json", "map_static.ply",
+                        "map_dynamic.ply", "map_all.ply"})
+    EXPECT_TRUE(std::filesystem::exists(dir / (std::string("out/") + f))) << f;
+  const std::string stats = idyvins::test::readFile(dir / "out/stats.json");
+  EXPECT_NE(stats.find("\"stereo_tested\""), std::string::npos);
+  EXPECT_NE(stats.find("\"stereo_eliminated\""), std::string::npos);
+  // The dump: the header, and rows whose stereo χ² was computed and rows eliminated.
+  const std::string csv = idyvins::test::readFile(dir / "obs.csv");
+  const std::string header =
+      "t_ns,id,u,v,track_length,frontend_label,d_s_px2,credibility,stereo_chi2,on_moving,confirmed_dynamic,"
+      "in_static_map,outlier_removed\n";
+  ASSERT_EQ(csv.compare(0, header.size(), header), 0) << csv.substr(0, 200);
+  std::size_t rows = 0, tested = 0, eliminated = 0, on_moving = 0;
+  std::size_t pos = header.size();
+  while (pos < csv.size()) {
+    const std::size_t end = csv.find('\n', pos);
+    ASSERT_NE(end, std::string::npos);
+    std::vector<std::string> cols;
+    std::size_t a = pos;
+    for (std::size_t b = csv.find(',', a); b < end; b = csv.find(',', a)) {
+      cols.push_back(csv.substr(a, b - a));
+      a = b + 1;
+    }
+    cols.push_back(csv.substr(a, end - a));
+    ASSERT_EQ(cols.size(), 13u) << csv.substr(pos, end - pos);
+    ++rows;
+    tested += std::stod(cols[8]) >= 0;
+    eliminated += cols[5] == "eliminated";
+    on_moving += cols[9] == "1";
+    pos = end + 1;
+  }
+  EXPECT_GT(rows, 5000u);
+  EXPECT_GT(tested, rows / 2);   // most tracked features have right matches in both frames
+  EXPECT_GT(eliminated, 50u);    // the trucks
+  EXPECT_GT(on_moving, 500u);    // masks were read
+  // Stereo test off in the config: no χ² in the dump.
+  {
+    std::ofstream f(cfg, std::ios::app);
+    f << "stereo_motion_test: 0\n";
+  }
+  const Result off = run("run --config " + cfg + " --dataset " + (dir / "ds") + " --out " + (dir / "out2") +
+                         " --mode idy --frames 30 --dump-observations " + (dir / "obs2.csv"));
+  ASSERT_EQ(off.code, 0) << off.out;
+  const std::string csv2 = idyvins::test::readFile(dir / "obs2.csv");
+  std::size_t with_chi2 = 0;
+  for (std::size_t p = csv2.find('\n'); p != std::string::npos && p + 1 < csv2.size(); p = csv2.find('\n', p + 1)) {
+    // the 9th column (stereo_chi2) of each row
+    std::size_t q = p + 1;
+    for (int k = 0; k < 8; ++k) q = csv2.find(',', q) + 1;
+    with_chi2 += csv2.compare(q, 3, "-1,") != 0;
+  }
+  EXPECT_EQ(with_chi2, 0u);
 }
 
 TEST(Cli, EvalOnRealGroundTruthAgainstItself) {

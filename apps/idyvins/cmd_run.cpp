@@ -336,7 +336,7 @@ void registerRun(CLI::App& app, int& exit_code) {
   cmd->add_option("--mode", a->mode, "overrides the config's mode: " + modeNames());
   cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)");
   cmd->add_option("--dump-observations", a->dump_observations,
-                  "write one CSV row per tracked observation (front-end label, d_s, ground-truth mask, final fate)");
+                  "write one CSV row per tracked observation (front-end label, d_s, stereo-test chi2, ground-truth mask, final fate)");
   cmd->callback([a, &exit_code] { exit_code = runRun(*a); });
 }
 
