@@ -243,6 +243,15 @@ Eigen::Isometry3d rightFromLeft() {
   return T;
 }
 
+/// A prior of pure forward motion, `step_m` per frame (P_prev = P_cur + t).
+frontend::MotionPrior forwardPrior(double step_m, double position_var) {
+  frontend::MotionPrior prior;
+  prior.valid = true;
+  prior.t_prev_cur = Vector3d(0, 0, step_m);
+  prior.cov_p = Matrix3d::Identity() * position_var;
+  return prior;
+}
+
 struct StereoPair {
   Vector2d l, r;
 };
@@ -315,10 +324,7 @@ TEST(StereoMotionTest, SeesMotionAlongTheEpipolarLineThatDsCannot) {
 TEST(IdyFilter, StereoTestMarksOnFirstFailureAndRemovesOnSecond) {
   const auto cam = pinholeCamera();
   const auto T_r_l = rightFromLeft();
-  frontend::MotionPrior prior;
-  prior.valid = true;
-  prior.t_prev_cur = Vector3d(0, 0, 0.5);
-  prior.cov_p = Matrix3d::Identity() * 1e-6;
+  const frontend::MotionPrior prior = forwardPrior(0.5, 1e-6);
   IdyOptions o;
   o.stereo_test = true;
   o.stereo_sigma_px = 0.25;
@@ -385,6 +391,81 @@ TEST(IdyFilter, StereoTestMarksOnFirstFailureAndRemovesOnSecond) {
   fresh.apply(ctx, items);
   EXPECT_EQ(feats[0].stereo_chi2, -1);
   EXPECT_EQ(fresh.lastStats().stereo_tested, points.size() - 1);
+}
+
+TEST(IdyFilter, AnchoredStereoTestSeesSlowMotionAlongTheLineOfSight) {
+  // A truck 25 m ahead drives away 0.15 m per frame while the camera moves 0.1 m per
+  // frame forward: per frame its image motion stays within the stereo depth noise, but
+  // against an anchor up to 10 frames back it does not. 80 static points with 0.2 px
+  // noise must survive 30 frames either way.
+  const auto cam = pinholeCamera();
+  const auto T_r_l = rightFromLeft();
+  const frontend::MotionPrior prior = forwardPrior(0.1, 1e-8);
+  auto runFrames = [&](int anchor_frames, int& truck_removed_at, int& static_removed) {
+    IdyOptions o;
+    o.stereo_test = true;
+    o.T_r_l = T_r_l;
+    o.stereo_anchor_frames = anchor_frames;
+    IdyFilter filter(o);
+    std::mt19937 rng(8);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::normal_distribution<double> noise(0.0, 0.2 / kF);
+    std::vector<Vector3d> points(81);
+    for (auto& p : points) p = Vector3d(6 * u(rng), 2 * u(rng), 12 + 8 * (u(rng) + 1));
+    points[0] = Vector3d(2.5, 0.3, 25.0);  // the truck's feature
+    std::vector<frontend::Feature> feats(points.size());
+    std::vector<frontend::FilterItem> items(points.size());
+    std::vector<bool> gone(points.size(), false);
+    std::vector<StereoPair> prev(points.size());
+    auto nz = [&](const Vector2d& x) { return Vector2d(x + Vector2d(noise(rng), noise(rng))); };
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const StereoPair o0 = observe(points[i], T_r_l);
+      prev[i] = {nz(o0.l), nz(o0.r)};
+    }
+    truck_removed_at = -1;
+    static_removed = 0;
+    frontend::FilterContext ctx{cam.get(), &prior, nullptr, 0, 50'000'000};
+    for (int frame = 1; frame <= 30; ++frame) {
+      std::vector<frontend::FilterItem> live;
+      std::vector<std::size_t> ids;
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        points[i] += Vector3d(0, 0, i == 0 ? 0.15 : 0.0) - prior.t_prev_cur;
+        if (gone[i]) continue;
+        const StereoPair ob = observe(points[i], T_r_l);
+        feats[i] = {};
+        feats[i].id = i;
+        feats[i].xy = nz(ob.l);
+        feats[i].has_right = true;
+        feats[i].xy_right = nz(ob.r);
+        frontend::FilterItem it;
+        it.feature = &feats[i];
+        it.tracked = true;
+        it.prev_xy = prev[i].l;
+        it.prev_has_right = true;
+        it.prev_xy_right = prev[i].r;
+        live.push_back(it);
+        ids.push_back(i);
+        prev[i] = {feats[i].xy, feats[i].xy_right};
+      }
+      filter.apply(ctx, live);
+      for (std::size_t k = 0; k < live.size(); ++k) {
+        if (!live[k].remove) continue;
+        gone[ids[k]] = true;
+        if (ids[k] == 0)
+          truck_removed_at = frame;
+        else
+          ++static_removed;
+      }
+    }
+  };
+  int at1 = 0, st1 = 0, at10 = 0, st10 = 0;
+  runFrames(1, at1, st1);
+  runFrames(10, at10, st10);
+  EXPECT_EQ(at1, -1);  // consecutive frames only: never removed in 30 frames
+  EXPECT_GT(at10, 2);  // anchored: removed after a few frames of accumulated motion
+  EXPECT_LE(at10, 12);
+  EXPECT_LE(st1, 1);
+  EXPECT_LE(st10, 1);
 }
 
 }  // namespace

@@ -46,6 +46,8 @@ std::unique_ptr<frontend::FeatureFilter> makeFilter(Mode mode, const Config& c) 
       o.stereo_chi2 = c.dynamic.stereo_chi2;
       o.stereo_sigma_px = c.dynamic.stereo_sigma_px;
       o.stereo_strikes = c.dynamic.stereo_strikes;
+      o.stereo_anchor_frames = c.dynamic.stereo_anchor_frames;
+      o.stereo_drift_mps = c.dynamic.stereo_drift_mps;
       if (o.stereo_test) o.T_r_l = c.T_b_c[1].inverse() * c.T_b_c[0];
       return std::make_unique<dynamic::IdyFilter>(o);
     }

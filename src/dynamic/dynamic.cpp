@@ -163,7 +163,10 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
   if (tracked.empty()) return;  // the pass over new corners
   stats_ = FrameStats{};
   stats_.tracked = tracked.size();
-  if (!ctx.prior || !ctx.prior->valid) return;  // no prior yet: unfiltered
+  if (!ctx.prior || !ctx.prior->valid) {  // no prior yet: unfiltered (and the anchors' chains break)
+    stereo_anchors_.clear();
+    return;
+  }
   stats_.prior_valid = true;
   const double sigma = credibility(*ctx.prior);
   stats_.credibility = sigma;
@@ -204,13 +207,35 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
   }
   if (!o_.stereo_test) return;
   const double sigma_p2 = std::max(0.0, ctx.prior->cov_p.trace()) / 3.0;
+  const double dt = std::max(0.0, toSeconds(ctx.t_cur_ns - ctx.t_prev_ns));
   std::unordered_map<std::uint64_t, int> strikes;  // consecutive failures, of the features seen now
+  std::unordered_map<std::uint64_t, StereoAnchor> anchors;
   for (std::size_t k = 0; k < tracked.size(); ++k) {
     auto& it = items[tracked[k]];
-    if (removed[k] || !it.prev_has_right || !it.feature->has_right) continue;
+    if (removed[k]) continue;
+    // The anchor: the stereo observation the current one is compared with, and the
+    // camera motion since, chained from the per-frame priors (P_anchor = R P_cur + t).
+    StereoAnchor anchor;
+    const auto old = stereo_anchors_.find(it.feature->id);
+    if (old != stereo_anchors_.end() && (old->second.steps < o_.stereo_anchor_frames || !it.prev_has_right)) {
+      anchor = old->second;
+      anchor.t = anchor.R * ctx.prior->t_prev_cur + anchor.t;
+      anchor.R = anchor.R * R;
+      anchor.var_p += sigma_p2;
+      ++anchor.steps;
+    } else if (it.prev_has_right) {
+      anchor = {it.prev_xy, it.prev_xy_right, R, ctx.prior->t_prev_cur, sigma_p2, 1};
+    } else {
+      continue;
+    }
+    anchors[it.feature->id] = anchor;
+    if (!it.feature->has_right) continue;
     ++stats_.stereo_tested;
-    const StereoMotionError e = stereoMotionError(it.prev_xy, it.prev_xy_right, it.feature->xy, it.feature->xy_right,
-                                                  o_.T_r_l, R, ctx.prior->t_prev_cur, sigma_p2, fx, o_.stereo_sigma_px);
+    // Beyond the first step the chained priors drift (velocity error × time).
+    const double drift = o_.stereo_drift_mps * (anchor.steps - 1) * dt;
+    const StereoMotionError e = stereoMotionError(anchor.xy_l, anchor.xy_r, it.feature->xy, it.feature->xy_right,
+                                                  o_.T_r_l, anchor.R, anchor.t, anchor.var_p + drift * drift, fx,
+                                                  o_.stereo_sigma_px);
     if (!e.valid) continue;
     it.feature->stereo_chi2 = e.chi2;
     if (e.chi2 <= o_.stereo_chi2) continue;
@@ -235,6 +260,7 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
     }
   }
   stereo_strikes_ = std::move(strikes);
+  stereo_anchors_ = std::move(anchors);
 }
 
 }  // namespace idyvins::dynamic

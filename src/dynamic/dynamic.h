@@ -88,7 +88,7 @@ struct FrameStats {
   std::string stop_rule;
   std::vector<double> d_s;       ///< per tracked feature (px²), before elimination
   std::vector<double> d_s_kept;  ///< the ones left after elimination
-  std::size_t stereo_tested = 0;      ///< features with a right match in both frames (stereo test)
+  std::size_t stereo_tested = 0;      ///< features with a right match now and a stereo anchor (stereo test)
   std::size_t stereo_eliminated = 0;  ///< of those, removed (or marked, idy-ba) by the stereo test
 };
 
@@ -104,6 +104,10 @@ struct IdyOptions {
   /// Consecutive failures before a feature is removed (stereo_motion_strikes); an
   /// earlier failure marks it as a candidate.
   int stereo_strikes = 2;
+  /// Compare with the stereo observation up to this many frames back (chained priors;
+  /// 1 = the previous frame), re-anchoring when older (stereo_motion_anchor_frames).
+  int stereo_anchor_frames = 10;
+  double stereo_drift_mps = 0.02;  ///< m/s, drift of the chained priors (stereo_motion_drift_mps)
   Eigen::Isometry3d T_r_l = Eigen::Isometry3d::Identity();  ///< left camera -> right camera
 };
 
@@ -123,6 +127,14 @@ class IdyFilter final : public frontend::FeatureFilter {
   IdyOptions o_;
   FrameStats stats_;
   std::unordered_map<std::uint64_t, int> stereo_strikes_;  ///< id -> consecutive stereo-test failures
+  struct StereoAnchor {
+    Eigen::Vector2d xy_l, xy_r;  ///< stereo observation at the anchor frame (normalized)
+    Eigen::Matrix3d R;           ///< P_anchor = R P_cur + t, chained priors
+    Eigen::Vector3d t;
+    double var_p;                ///< summed prior position variance (m²)
+    int steps;                   ///< frames since the anchor
+  };
+  std::unordered_map<std::uint64_t, StereoAnchor> stereo_anchors_;  ///< id -> anchor
 };
 
 }  // namespace idyvins::dynamic

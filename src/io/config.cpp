@@ -251,6 +251,11 @@ Config loadConfig(const std::string& path) {
     c.dynamic.stereo_strikes = getInt(f, f.root, "stereo_motion_strikes", "consecutive failures, >= 1");
     checkPositive(f, "stereo_motion_strikes", c.dynamic.stereo_strikes);
   }
+  if (f.root["stereo_motion_anchor_frames"]) {
+    c.dynamic.stereo_anchor_frames = getInt(f, f.root, "stereo_motion_anchor_frames", "frames, >= 1");
+    checkPositive(f, "stereo_motion_anchor_frames", c.dynamic.stereo_anchor_frames);
+  }
+  c.dynamic.stereo_drift_mps = getDoubleOr(f, "stereo_motion_drift_mps", c.dynamic.stereo_drift_mps);
   checkPositive(f, "stereo_motion_chi2", c.dynamic.stereo_chi2);
   checkPositive(f, "stereo_motion_sigma_px", c.dynamic.stereo_sigma_px);
   if (f.root["mode"]) {
@@ -296,7 +301,8 @@ std::string describe(const Config& c) {
     << " px^2, lambda_dy_c " << c.dynamic.lambda_dy_c << " px^2, outliers confirmed dynamic: "
     << (c.dynamic.confirm_outliers ? "yes" : "no") << "\n";
   o << "  stereo motion test: " << (c.dynamic.stereo_test ? "on" : "off") << " (chi2 " << c.dynamic.stereo_chi2
-    << ", sigma " << c.dynamic.stereo_sigma_px << " px, " << c.dynamic.stereo_strikes << " strikes)\n";
+    << ", sigma " << c.dynamic.stereo_sigma_px << " px, " << c.dynamic.stereo_strikes << " strikes, anchor " << c.dynamic.stereo_anchor_frames
+    << " frames, drift " << c.dynamic.stereo_drift_mps << " m/s)\n";
   return o.str();
 }
 

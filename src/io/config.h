@@ -53,6 +53,8 @@ struct DynamicOptions {
   double stereo_chi2 = 18.47;    ///< χ²₄ at 99.9 %
   double stereo_sigma_px = 0.25; ///< px, one KLT / stereo match
   int stereo_strikes = 2;        ///< consecutive failures before removal
+  int stereo_anchor_frames = 10; ///< compare with the stereo observation up to this many frames back
+  double stereo_drift_mps = 0.02;  ///< m/s, drift of chained priors
 };
 
 /// Whole-system configuration.
