@@ -52,7 +52,7 @@ void BM_IdyFilter150(benchmark::State& state) {
     items[i].prev_xy_right = proj(T_r_l * p_prev);
   }
   dynamic::IdyOptions o;
-  o.stereo_test = stereo;
+  o.stereo.enabled = stereo;
   o.T_r_l = T_r_l;
   frontend::FilterContext ctx{cam.get(), &prior, nullptr, 0, 50'000'000};
   std::size_t eliminated = 0, candidates = 0;

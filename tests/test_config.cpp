@@ -112,24 +112,24 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
                    .dynamic.confirm_outliers);
   EXPECT_FALSE(c.estimate_td);
   EXPECT_DOUBLE_EQ(c.td_s, 0.0);
-  EXPECT_TRUE(c.dynamic.stereo_test);  // defaults of the stereo motion test
-  EXPECT_DOUBLE_EQ(c.dynamic.stereo_chi2, 18.47);
-  EXPECT_DOUBLE_EQ(c.dynamic.stereo_sigma_px, 0.25);
-  EXPECT_EQ(c.dynamic.stereo_strikes, 2);
-  EXPECT_EQ(c.dynamic.stereo_anchor_frames, 10);
-  EXPECT_DOUBLE_EQ(c.dynamic.stereo_drift_mps, 0.02);
+  EXPECT_TRUE(c.dynamic.stereo.enabled);  // defaults of the stereo motion test
+  EXPECT_DOUBLE_EQ(c.dynamic.stereo.chi2, 18.47);
+  EXPECT_DOUBLE_EQ(c.dynamic.stereo.sigma_px, 0.25);
+  EXPECT_EQ(c.dynamic.stereo.strikes, 2);
+  EXPECT_EQ(c.dynamic.stereo.anchor_frames, 10);
+  EXPECT_DOUBLE_EQ(c.dynamic.stereo.drift_mps, 0.02);
   const Config s = loadConfig(writeConfig(
       dir,
       std::string(kConfig) +
           "stereo_motion_test: 0\nstereo_motion_chi2: 13.3\nstereo_motion_sigma_px: 0.4\nstereo_motion_strikes: 1\n"
           "stereo_motion_anchor_frames: 1\nstereo_motion_drift_mps: 0.1\n",
       kCamera));
-  EXPECT_FALSE(s.dynamic.stereo_test);
-  EXPECT_DOUBLE_EQ(s.dynamic.stereo_chi2, 13.3);
-  EXPECT_DOUBLE_EQ(s.dynamic.stereo_sigma_px, 0.4);
-  EXPECT_EQ(s.dynamic.stereo_strikes, 1);
-  EXPECT_EQ(s.dynamic.stereo_anchor_frames, 1);
-  EXPECT_DOUBLE_EQ(s.dynamic.stereo_drift_mps, 0.1);
+  EXPECT_FALSE(s.dynamic.stereo.enabled);
+  EXPECT_DOUBLE_EQ(s.dynamic.stereo.chi2, 13.3);
+  EXPECT_DOUBLE_EQ(s.dynamic.stereo.sigma_px, 0.4);
+  EXPECT_EQ(s.dynamic.stereo.strikes, 1);
+  EXPECT_EQ(s.dynamic.stereo.anchor_frames, 1);
+  EXPECT_DOUBLE_EQ(s.dynamic.stereo.drift_mps, 0.1);
   expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_sigma_px: 0\n", kCamera)); },
               "stereo_motion_sigma_px");
 }

@@ -326,12 +326,12 @@ TEST(IdyFilter, StereoTestMarksOnFirstFailureAndRemovesOnSecond) {
   const auto T_r_l = rightFromLeft();
   const frontend::MotionPrior prior = forwardPrior(0.5, 1e-6);
   IdyOptions o;
-  o.stereo_test = true;
-  o.stereo_sigma_px = 0.25;
+  o.stereo.enabled = true;
+  o.stereo.sigma_px = 0.25;
   o.T_r_l = T_r_l;
   IdyFilter filter(o);
   IdyOptions off = o;
-  off.stereo_test = false;
+  off.stereo.enabled = false;
   IdyFilter paper_only(off);
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -372,7 +372,7 @@ TEST(IdyFilter, StereoTestMarksOnFirstFailureAndRemovesOnSecond) {
   filter.apply(ctx, items);  // first failure: marked only
   EXPECT_FALSE(items[0].remove);
   EXPECT_EQ(feats[0].label, frontend::FeatureLabel::kCandidate);
-  EXPECT_GT(feats[0].stereo_chi2, o.stereo_chi2);
+  EXPECT_GT(feats[0].stereo_chi2, o.stereo.chi2);
   EXPECT_EQ(filter.lastStats().stereo_tested, points.size());
   frameItems(feats, items);
   filter.apply(ctx, items);  // second consecutive failure: removed
@@ -403,9 +403,9 @@ TEST(IdyFilter, AnchoredStereoTestSeesSlowMotionAlongTheLineOfSight) {
   const frontend::MotionPrior prior = forwardPrior(0.1, 1e-8);
   auto runFrames = [&](int anchor_frames, int& truck_removed_at, int& static_removed) {
     IdyOptions o;
-    o.stereo_test = true;
+    o.stereo.enabled = true;
     o.T_r_l = T_r_l;
-    o.stereo_anchor_frames = anchor_frames;
+    o.stereo.anchor_frames = anchor_frames;
     IdyFilter filter(o);
     std::mt19937 rng(8);
     std::uniform_real_distribution<double> u(-1.0, 1.0);

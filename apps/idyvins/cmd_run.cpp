@@ -42,13 +42,9 @@ std::unique_ptr<frontend::FeatureFilter> makeFilter(Mode mode, const Config& c) 
       o.lambda_dy = c.dynamic.lambda_dy;
       o.lambda_dy_c = c.dynamic.lambda_dy_c;
       o.eliminate = mode != Mode::kIdyBa;
-      o.stereo_test = c.dynamic.stereo_test && c.num_cam == 2 && c.T_b_c.size() >= 2;
-      o.stereo_chi2 = c.dynamic.stereo_chi2;
-      o.stereo_sigma_px = c.dynamic.stereo_sigma_px;
-      o.stereo_strikes = c.dynamic.stereo_strikes;
-      o.stereo_anchor_frames = c.dynamic.stereo_anchor_frames;
-      o.stereo_drift_mps = c.dynamic.stereo_drift_mps;
-      if (o.stereo_test) o.T_r_l = c.T_b_c[1].inverse() * c.T_b_c[0];
+      o.stereo = c.dynamic.stereo;
+      o.stereo.enabled = o.stereo.enabled && c.num_cam == 2 && c.T_b_c.size() >= 2;
+      if (o.stereo.enabled) o.T_r_l = c.T_b_c[1].inverse() * c.T_b_c[0];
       return std::make_unique<dynamic::IdyFilter>(o);
     }
     default: return nullptr;

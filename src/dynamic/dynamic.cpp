@@ -205,11 +205,10 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
     items[tracked[k]].feature->label = frontend::FeatureLabel::kCandidate;
     ++stats_.candidates;
   }
-  if (!o_.stereo_test) return;
+  if (!o_.stereo.enabled) return;
   const double sigma_p2 = std::max(0.0, ctx.prior->cov_p.trace()) / 3.0;
   const double dt = std::max(0.0, toSeconds(ctx.t_cur_ns - ctx.t_prev_ns));
-  std::unordered_map<std::uint64_t, int> strikes;  // consecutive failures, of the features seen now
-  std::unordered_map<std::uint64_t, StereoAnchor> anchors;
+  std::unordered_map<std::uint64_t, StereoAnchor> anchors;  // of the features seen now
   for (std::size_t k = 0; k < tracked.size(); ++k) {
     auto& it = items[tracked[k]];
     if (removed[k]) continue;
@@ -217,32 +216,32 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
     // camera motion since, chained from the per-frame priors (P_anchor = R P_cur + t).
     StereoAnchor anchor;
     const auto old = stereo_anchors_.find(it.feature->id);
-    if (old != stereo_anchors_.end() && (old->second.steps < o_.stereo_anchor_frames || !it.prev_has_right)) {
+    const int strikes_before = old != stereo_anchors_.end() ? old->second.strikes : 0;
+    if (old != stereo_anchors_.end() && (old->second.steps < o_.stereo.anchor_frames || !it.prev_has_right)) {
       anchor = old->second;
       anchor.t = anchor.R * ctx.prior->t_prev_cur + anchor.t;
       anchor.R = anchor.R * R;
       anchor.var_p += sigma_p2;
       ++anchor.steps;
     } else if (it.prev_has_right) {
-      anchor = {it.prev_xy, it.prev_xy_right, R, ctx.prior->t_prev_cur, sigma_p2, 1};
+      anchor = {it.prev_xy, it.prev_xy_right, R, ctx.prior->t_prev_cur, sigma_p2, 1, 0};
     } else {
       continue;
     }
-    anchors[it.feature->id] = anchor;
+    anchor.strikes = 0;  // until this frame's test fails
+    StereoAnchor& kept = anchors[it.feature->id] = anchor;
     if (!it.feature->has_right) continue;
     ++stats_.stereo_tested;
     // Beyond the first step the chained priors drift (velocity error × time).
-    const double drift = o_.stereo_drift_mps * (anchor.steps - 1) * dt;
+    const double drift = o_.stereo.drift_mps * (anchor.steps - 1) * dt;
     const StereoMotionError e = stereoMotionError(anchor.xy_l, anchor.xy_r, it.feature->xy, it.feature->xy_right,
                                                   o_.T_r_l, anchor.R, anchor.t, anchor.var_p + drift * drift, fx,
-                                                  o_.stereo_sigma_px);
+                                                  o_.stereo.sigma_px);
     if (!e.valid) continue;
     it.feature->stereo_chi2 = e.chi2;
-    if (e.chi2 <= o_.stereo_chi2) continue;
-    auto s = stereo_strikes_.find(it.feature->id);
-    const int n = (s == stereo_strikes_.end() ? 0 : s->second) + 1;
-    strikes[it.feature->id] = n;
-    if (n < o_.stereo_strikes) {  // a first failure only marks (one bad match is not motion)
+    if (e.chi2 <= o_.stereo.chi2) continue;
+    kept.strikes = strikes_before + 1;
+    if (kept.strikes < o_.stereo.strikes) {  // a first failure only marks (one bad match is not motion)
       if (it.feature->label != frontend::FeatureLabel::kCandidate) {
         it.feature->label = frontend::FeatureLabel::kCandidate;
         ++stats_.candidates;
@@ -259,7 +258,6 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
       ++stats_.candidates;
     }
   }
-  stereo_strikes_ = std::move(strikes);
   stereo_anchors_ = std::move(anchors);
 }
 

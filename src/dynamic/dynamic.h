@@ -13,6 +13,7 @@
 #include "core/measurements.h"
 #include "frontend/feature_filter.h"
 #include "imu/preintegration.h"
+#include "io/config.h"
 
 namespace idyvins::dynamic {
 
@@ -97,17 +98,8 @@ struct IdyOptions {
   double lambda_dy = 4.0;    ///< px², elimination threshold (lambda_dy)
   double lambda_dy_c = 1.0;  ///< px², candidate threshold (lambda_dy_c)
   bool eliminate = true;     ///< false in mode idy-ba: only mark
-  /// Stereo motion test (extension, stereo_motion_test): off when T_r_l is unset.
-  bool stereo_test = false;
-  double stereo_chi2 = 18.47;  ///< χ²₄ at 99.9 % (stereo_motion_chi2)
-  double stereo_sigma_px = 0.25;  ///< σ of one KLT / stereo match (stereo_motion_sigma_px)
-  /// Consecutive failures before a feature is removed (stereo_motion_strikes); an
-  /// earlier failure marks it as a candidate.
-  int stereo_strikes = 2;
-  /// Compare with the stereo observation up to this many frames back (chained priors;
-  /// 1 = the previous frame), re-anchoring when older (stereo_motion_anchor_frames).
-  int stereo_anchor_frames = 10;
-  double stereo_drift_mps = 0.02;  ///< m/s, drift of the chained priors (stereo_motion_drift_mps)
+  /// Stereo motion test (extension); off unless enabled here (needs T_r_l).
+  StereoMotionOptions stereo{false};  // the other fields keep the config's defaults
   Eigen::Isometry3d T_r_l = Eigen::Isometry3d::Identity();  ///< left camera -> right camera
 };
 
@@ -126,13 +118,13 @@ class IdyFilter final : public frontend::FeatureFilter {
  private:
   IdyOptions o_;
   FrameStats stats_;
-  std::unordered_map<std::uint64_t, int> stereo_strikes_;  ///< id -> consecutive stereo-test failures
   struct StereoAnchor {
     Eigen::Vector2d xy_l, xy_r;  ///< stereo observation at the anchor frame (normalized)
     Eigen::Matrix3d R;           ///< P_anchor = R P_cur + t, chained priors
     Eigen::Vector3d t;
     double var_p;                ///< summed prior position variance (m²)
     int steps;                   ///< frames since the anchor
+    int strikes;                 ///< consecutive failures of the test up to now
   };
   std::unordered_map<std::uint64_t, StereoAnchor> stereo_anchors_;  ///< id -> anchor
 };

@@ -244,20 +244,20 @@ Config loadConfig(const std::string& path) {
   if (f.root["confirm_outliers_dynamic"])
     c.dynamic.confirm_outliers = getInt(f, f.root, "confirm_outliers_dynamic", "0 or 1") != 0;
   if (f.root["stereo_motion_test"])
-    c.dynamic.stereo_test = getInt(f, f.root, "stereo_motion_test", "0 or 1") != 0;
-  c.dynamic.stereo_chi2 = getDoubleOr(f, "stereo_motion_chi2", c.dynamic.stereo_chi2);
-  c.dynamic.stereo_sigma_px = getDoubleOr(f, "stereo_motion_sigma_px", c.dynamic.stereo_sigma_px);
+    c.dynamic.stereo.enabled = getInt(f, f.root, "stereo_motion_test", "0 or 1") != 0;
+  c.dynamic.stereo.chi2 = getDoubleOr(f, "stereo_motion_chi2", c.dynamic.stereo.chi2);
+  c.dynamic.stereo.sigma_px = getDoubleOr(f, "stereo_motion_sigma_px", c.dynamic.stereo.sigma_px);
   if (f.root["stereo_motion_strikes"]) {
-    c.dynamic.stereo_strikes = getInt(f, f.root, "stereo_motion_strikes", "consecutive failures, >= 1");
-    checkPositive(f, "stereo_motion_strikes", c.dynamic.stereo_strikes);
+    c.dynamic.stereo.strikes = getInt(f, f.root, "stereo_motion_strikes", "consecutive failures, >= 1");
+    checkPositive(f, "stereo_motion_strikes", c.dynamic.stereo.strikes);
   }
   if (f.root["stereo_motion_anchor_frames"]) {
-    c.dynamic.stereo_anchor_frames = getInt(f, f.root, "stereo_motion_anchor_frames", "frames, >= 1");
-    checkPositive(f, "stereo_motion_anchor_frames", c.dynamic.stereo_anchor_frames);
+    c.dynamic.stereo.anchor_frames = getInt(f, f.root, "stereo_motion_anchor_frames", "frames, >= 1");
+    checkPositive(f, "stereo_motion_anchor_frames", c.dynamic.stereo.anchor_frames);
   }
-  c.dynamic.stereo_drift_mps = getDoubleOr(f, "stereo_motion_drift_mps", c.dynamic.stereo_drift_mps);
-  checkPositive(f, "stereo_motion_chi2", c.dynamic.stereo_chi2);
-  checkPositive(f, "stereo_motion_sigma_px", c.dynamic.stereo_sigma_px);
+  c.dynamic.stereo.drift_mps = getDoubleOr(f, "stereo_motion_drift_mps", c.dynamic.stereo.drift_mps);
+  checkPositive(f, "stereo_motion_chi2", c.dynamic.stereo.chi2);
+  checkPositive(f, "stereo_motion_sigma_px", c.dynamic.stereo.sigma_px);
   if (f.root["mode"]) {
     const std::string m = getString(f, f.root, "mode", modeNames());
     if (!parseMode(m, c.dynamic.mode))
@@ -300,9 +300,9 @@ std::string describe(const Config& c) {
   o << "  mode: " << toString(c.dynamic.mode) << ", lambda_dy " << c.dynamic.lambda_dy
     << " px^2, lambda_dy_c " << c.dynamic.lambda_dy_c << " px^2, outliers confirmed dynamic: "
     << (c.dynamic.confirm_outliers ? "yes" : "no") << "\n";
-  o << "  stereo motion test: " << (c.dynamic.stereo_test ? "on" : "off") << " (chi2 " << c.dynamic.stereo_chi2
-    << ", sigma " << c.dynamic.stereo_sigma_px << " px, " << c.dynamic.stereo_strikes << " strikes, anchor " << c.dynamic.stereo_anchor_frames
-    << " frames, drift " << c.dynamic.stereo_drift_mps << " m/s)\n";
+  o << "  stereo motion test: " << (c.dynamic.stereo.enabled ? "on" : "off") << " (chi2 " << c.dynamic.stereo.chi2
+    << ", sigma " << c.dynamic.stereo.sigma_px << " px, " << c.dynamic.stereo.strikes << " strikes, anchor " << c.dynamic.stereo.anchor_frames
+    << " frames, drift " << c.dynamic.stereo.drift_mps << " m/s)\n";
   return o.str();
 }
 

@@ -37,6 +37,19 @@ struct SolverOptions {
 };
 
 /// Parameters of the paper's method (DESIGN §4).
+/// Extension of §4.3 (not in the paper): the stereo motion test (dynamic::stereoMotionError)
+/// catches motion along the epipolar line, which d_s cannot see (README, *The IDY method*).
+struct StereoMotionOptions {
+  bool enabled = true;         ///< `stereo_motion_test`
+  double chi2 = 18.47;         ///< `stereo_motion_chi2`: χ²₄ at 99.9 %
+  double sigma_px = 0.25;      ///< `stereo_motion_sigma_px`: one KLT / stereo match
+  int strikes = 2;             ///< `stereo_motion_strikes`: consecutive failures before removal
+                               ///< (an earlier failure marks the feature as a candidate)
+  int anchor_frames = 10;      ///< `stereo_motion_anchor_frames`: compare with the stereo
+                               ///< observation up to this many frames back (1 = previous frame)
+  double drift_mps = 0.02;     ///< `stereo_motion_drift_mps`: drift of the chained priors
+};
+
 struct DynamicOptions {
   Mode mode = Mode::kIdy;
   double lambda_dy = 4.0;    ///< px^2, elimination threshold (eq. 4)
@@ -46,15 +59,7 @@ struct DynamicOptions {
   /// (its track leaves the window for good, dynamic map) instead of being dropped and
   /// re-triangulated from its next observation. Config key `confirm_outliers_dynamic`.
   bool confirm_outliers = true;
-  /// Extension of §4.3 (not in the paper): the stereo motion test (dynamic::stereoMotionError)
-  /// catches motion along the epipolar line, which d_s cannot see. Config keys
-  /// `stereo_motion_test` (0/1), `stereo_motion_chi2`, `stereo_motion_sigma_px`.
-  bool stereo_test = true;
-  double stereo_chi2 = 18.47;    ///< χ²₄ at 99.9 %
-  double stereo_sigma_px = 0.25; ///< px, one KLT / stereo match
-  int stereo_strikes = 2;        ///< consecutive failures before removal
-  int stereo_anchor_frames = 10; ///< compare with the stereo observation up to this many frames back
-  double stereo_drift_mps = 0.02;  ///< m/s, drift of chained priors
+  StereoMotionOptions stereo;
 };
 
 /// Whole-system configuration.
