@@ -110,6 +110,11 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
   EXPECT_TRUE(c.dynamic.confirm_outliers);  // default
   EXPECT_FALSE(loadConfig(writeConfig(dir, std::string(kConfig) + "confirm_outliers_dynamic: 0\n", kCamera))
                    .dynamic.confirm_outliers);
+  EXPECT_TRUE(c.dynamic.lost_track_test);  // default
+  EXPECT_FALSE(loadConfig(writeConfig(dir, std::string(kConfig) + "lost_track_test: 0\n", kCamera))
+                   .dynamic.lost_track_test);
+  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "lost_track_test: yes\n", kCamera)); },
+              "lost_track_test");
   EXPECT_FALSE(c.estimate_td);
   EXPECT_DOUBLE_EQ(c.td_s, 0.0);
   EXPECT_TRUE(c.dynamic.stereo.enabled);  // defaults of the stereo motion test

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <algorithm>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <unordered_map>
 #include <unordered_set>
@@ -104,6 +105,8 @@ int runRun(const RunArgs& a) {
   // the estimator again, but the tracker keeps following them so that no new corner is
   // seeded on the same moving object.
   tracker_params.keep_following_eliminated = mode == Mode::kIdy || mode == Mode::kIdyPre;
+  // Session-7 extension: new corners lost in their second frame, judged against the prior.
+  tracker_params.judge_lost_new_tracks = tracker_params.keep_following_eliminated && config.dynamic.lost_track_test;
   frontend::FeatureTracker tracker(config, tracker_params);
   auto filter = makeFilter(mode, config);
   backend::EstimatorOptions est_options;
@@ -117,7 +120,9 @@ int runRun(const RunArgs& a) {
   std::vector<StampedPose> trajectory;
   std::vector<GroundTruthState> states;  // the full estimated state, written as state.csv
   nlohmann::json frames = nlohmann::json::array(), resets = nlohmann::json::array();
-  std::size_t count = 0, frames_without_prior = 0;
+  std::size_t count = 0, frames_without_prior = 0, lost_tested = 0, lost_moving = 0;
+  std::unordered_set<std::uint64_t> lost_moving_ids;  // their only observation is relabelled at the end
+  std::optional<std::pair<Eigen::Isometry3d, Eigen::Isometry3d>> prev_T_w_c;  // previous frame's cameras
   struct ObsRecord {
     std::uint64_t id;
     bool on_moving;
@@ -169,14 +174,26 @@ int runRun(const RunArgs& a) {
       for (const auto& f : ff.features) record(f);
       for (const auto& f : ff.removed) record(f);  // label kEliminated
     }
+    lost_tested += ff.lost_tested;
+    lost_moving += ff.lost_moving.size();
+    for (const auto& f : ff.lost_moving) {
+      lost_moving_ids.insert(f.id);
+      if (!prev_T_w_c) continue;  // dynamic map: triangulated in the frame it was seen in
+      const auto& [T_w_c0, T_w_c1] = *prev_T_w_c;
+      const Eigen::Vector3d p_w = backend::triangulateTwoViews(T_w_c0, f.xy, T_w_c1, f.xy_right);
+      const double z = (T_w_c0.inverse() * p_w).z();
+      if (z > 0.1 && z < 80.0) eliminated_points.push_back({p_w, 1});
+    }
     const backend::FrameResult r = estimator.addFrame(ff);
     outlier_ids.insert(r.outlier_ids.begin(), r.outlier_ids.end());
+    prev_T_w_c.reset();
     if (idy && r.initialized) {  // eliminated features with a stereo match go to the dynamic map
       Eigen::Isometry3d T_w_b = Eigen::Isometry3d::Identity();
       T_w_b.linear() = r.state.q_w_b.toRotationMatrix();
       T_w_b.translation() = r.state.p_w_b;
       const Eigen::Isometry3d T_w_c0 = backend::cameraPose(T_w_b, estimator.rig().T_b_c0);
       const Eigen::Isometry3d T_w_c1 = backend::cameraPose(T_w_b, estimator.rig().T_b_c1);
+      prev_T_w_c.emplace(T_w_c0, T_w_c1);
       for (const auto& f : ff.removed) {
         if (!f.has_right) continue;
         const Eigen::Vector3d p_w = backend::triangulateTwoViews(T_w_c0, f.xy, T_w_c1, f.xy_right);
@@ -206,6 +223,7 @@ int runRun(const RunArgs& a) {
              {"candidates_in_window", r.candidates}, {"confirmed_dynamic", r.confirmed_dynamic},
              {"outliers_confirmed_dynamic", r.outliers_confirmed},
              {"stereo_tested", st.stereo_tested}, {"stereo_eliminated", st.stereo_eliminated},
+             {"lost_tested", ff.lost_tested}, {"lost_moving", ff.lost_moving.size()},
              {"cleared", r.cleared}};
       if (!st.prior_valid) ++frames_without_prior;
     }
@@ -232,6 +250,8 @@ int runRun(const RunArgs& a) {
   for (const auto& p : estimator.staticMap()) static_pts.push_back({p.p_w, 0});
   for (const auto& p : estimator.dynamicMap()) dynamic_pts.push_back({p.p_w, 2});
   nlohmann::json classification = nullptr;
+  for (auto& o : observations)  // a lost new corner judged moving: its one observation
+    if (lost_moving_ids.count(o.id)) o.label = frontend::FeatureLabel::kEliminated;
   if (has_masks) {
     std::vector<eval::MaskedObservation> masked;
     masked.reserve(observations.size());
@@ -276,6 +296,8 @@ int runRun(const RunArgs& a) {
                             {"poses", trajectory.size()},
                             {"initialized_at_s", init_t >= 0 ? toSeconds(init_t - first_t) : -1.0},
                             {"frames_without_prior", frames_without_prior},
+                            {"lost_new_corners_tested", lost_tested},
+                            {"lost_new_corners_moving", lost_moving},
                             {"map_static_points", static_pts.size()},
                             {"map_dynamic_points", dynamic_pts.size()},
                             {"classification", classification},

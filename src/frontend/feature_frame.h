@@ -35,6 +35,11 @@ struct FeatureFrame {
   /// Features labelled kEliminated in this frame: removed by the filter now, or (with
   /// TrackerParams::keep_following_eliminated) removed earlier and still followed.
   std::vector<Feature> removed;
+  /// New corners lost in this frame (tracked for one frame only) that are not where the
+  /// motion prior puts a static point (TrackerParams::judge_lost_new_tracks): their
+  /// previous-frame observation (uv, xy, right match), labelled kEliminated.
+  std::vector<Feature> lost_moving;
+  std::size_t lost_tested = 0;  ///< lost new corners the static hypothesis could be tested on
   double tracking_ms = 0;  ///< KLT, detection, stereo, undistortion
   double filter_ms = 0;    ///< the rejection filter (ransac / seg / idy preprocessing)
   std::size_t tracked = 0;     ///< features carried over from the previous frame (before the filter)

@@ -15,13 +15,28 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 Eigen::Vector2d toEigen(const cv::Point2f& p) { return {p.x, p.y}; }
+
+/// Depth in the left camera of a point seen at normalized xy_l (left) and xy_r (right),
+/// least squares over the two right-image equations; false when ill-conditioned.
+bool stereoDepth(const Eigen::Vector2d& xy_l, const Eigen::Vector2d& xy_r, const Eigen::Isometry3d& T_r_l,
+                 double& depth) {
+  const Eigen::Vector3d m(xy_l.x(), xy_l.y(), 1.0);
+  const Eigen::Vector3d Rm = T_r_l.linear() * m, t = T_r_l.translation();
+  // x_r (Rm.z d + t.z) = Rm.x d + t.x, same for y: a d = c.
+  const Eigen::Vector2d a(xy_r.x() * Rm.z() - Rm.x(), xy_r.y() * Rm.z() - Rm.y());
+  const Eigen::Vector2d c(t.x() - xy_r.x() * t.z(), t.y() - xy_r.y() * t.z());
+  const double aa = a.squaredNorm();
+  if (aa < 1e-12) return false;
+  depth = a.dot(c) / aa;
+  return std::isfinite(depth);
+}
 }  // namespace
 
 FeatureTracker::FeatureTracker(const Config& config, const TrackerParams& params) : config_(config), params_(params) {
   for (const auto& c : config.cams) cams_.push_back(camera::makeCamera(c));
   if (config.num_cam == 2) {
-    const Eigen::Isometry3d T_c1_c0 = config.T_b_c[1].inverse() * config.T_b_c[0];
-    E_c1_c0_ = hat(T_c1_c0.translation()) * T_c1_c0.linear();
+    T_c1_c0_ = config.T_b_c[1].inverse() * config.T_b_c[0];
+    E_c1_c0_ = hat(T_c1_c0_.translation()) * T_c1_c0_.linear();
   }
 }
 
@@ -47,7 +62,7 @@ bool FeatureTracker::inBorder(const cv::Point2f& p) const {
 }
 
 void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Mat& image, std::vector<Track>& tracks,
-                                   std::vector<PrevObs>& prev) {
+                                   std::vector<PrevObs>& prev, std::vector<const Track*>& lost) {
   if (prev_pyr_.empty() || prev_tracks_.empty()) return;
   std::vector<cv::Point2f> p0, p1, back;
   for (const auto& t : prev_tracks_) p0.push_back(t.uv);
@@ -62,26 +77,155 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Ma
                              cv::OPTFLOW_USE_INITIAL_FLOW);
   }
   for (std::size_t i = 0; i < p0.size(); ++i) {
+    const Track& old = prev_tracks_[i];
     bool ok = status[i] && inBorder(p1[i]);
     if (ok && config_.tracker.flow_back)
       ok = status_back[i] && cv::norm(back[i] - p0[i]) <= params_.flow_back_px;
-    if (!ok) continue;
-    const Track& old = prev_tracks_[i];
+    if (!ok) {
+      lost.push_back(&old);
+      continue;
+    }
     Eigen::Matrix2d A_patch = old.A_patch;
     if (params_.align_first_patch && old.patch) {
       AffineWarp warp{old.A_patch, toEigen(p1[i])};
       const AlignResult r = alignAffine(*old.patch, image, warp);
       if (!r.converged || r.zncc < params_.min_patch_zncc ||
-          (warp.t - toEigen(p1[i])).norm() > params_.max_patch_correction_px)
+          (warp.t - toEigen(p1[i])).norm() > params_.max_patch_correction_px) {
+        lost.push_back(&old);
         continue;
+      }
       p1[i] = cv::Point2f(static_cast<float>(warp.t.x()), static_cast<float>(warp.t.y()));
-      if (!inBorder(p1[i])) continue;
+      if (!inBorder(p1[i])) {
+        lost.push_back(&old);
+        continue;
+      }
       A_patch = warp.A;
     }
     Eigen::Vector2d xy;
-    if (!cams_[0]->liftToNormalized(toEigen(p1[i]), xy)) continue;
+    if (!cams_[0]->liftToNormalized(toEigen(p1[i]), xy)) {
+      lost.push_back(&old);
+      continue;
+    }
     tracks.push_back({old.id, p1[i], xy, old.length + 1, old.patch, A_patch});
     prev.push_back({toEigen(old.uv), old.xy, old.has_right, old.xy_right});
+  }
+}
+
+bool FeatureTracker::predictStatic(const Track& t, const MotionPrior& prior, Eigen::Vector3d& p_pred,
+                                   Eigen::Vector2d& uv_pred, double& tol_px) const {
+  if (!prior.valid || !t.has_right || !t.patch || cams_.size() < 2) return false;
+  double depth;
+  if (!stereoDepth(t.xy, t.xy_right, T_c1_c0_, depth) || depth < 0.1) return false;
+  // The point as static, moved into the current frame by the prior (points of the current
+  // camera map into the previous one by R_prev_cur, t_prev_cur).
+  const Eigen::Matrix3d R_cur_prev = prior.q_prev_cur.toRotationMatrix().transpose();
+  auto predict = [&](double z, Eigen::Vector2d& uv) {
+    const Eigen::Vector3d p_prev = Eigen::Vector3d(t.xy.x(), t.xy.y(), 1.0) * z;
+    const Eigen::Vector3d p_cur = R_cur_prev * (p_prev - prior.t_prev_cur);
+    return p_cur.z() > 0.1 && cams_[0]->project(p_cur, uv);
+  };
+  if (!predict(depth, uv_pred)) return false;
+  p_pred = R_cur_prev * (Eigen::Vector3d(t.xy.x(), t.xy.y(), 1.0) * depth - prior.t_prev_cur);
+  const double margin = params_.patch_half + 2;
+  if (uv_pred.x() < margin || uv_pred.y() < margin || uv_pred.x() >= config_.image_width - margin ||
+      uv_pred.y() >= config_.image_height - margin)
+    return false;
+  // Tolerance: the stereo depth's 3-sigma interval (disparity noise sqrt(2) sigma_px),
+  // three prior position sigmas at the point's depth, and a base term.
+  const double f = cams_[0]->focal(), b = T_c1_c0_.translation().norm();
+  const double sigma_rho = std::sqrt(2.0) * params_.lost_stereo_sigma_px / (f * b);
+  double tol_depth = 0;
+  for (double s : {-3.0, 3.0}) {
+    const double rho = std::max(1.0 / depth + s * sigma_rho, 1e-6);  // up to a point at infinity
+    Eigen::Vector2d uv;
+    if (!predict(1.0 / rho, uv)) return false;  // the interval reaches behind the camera: not judged
+    tol_depth = std::max(tol_depth, (uv - uv_pred).norm());
+  }
+  tol_px = params_.lost_base_tolerance_px + tol_depth +
+           3.0 * f * std::sqrt(std::max(prior.cov_p.trace(), 0.0)) / depth;
+  return true;
+}
+
+void FeatureTracker::judgeLost(const std::vector<cv::Mat>& pyr, const cv::Mat& image, const MotionPrior& prior,
+                               const std::vector<const Track*>& lost, FeatureFrame& out) const {
+  std::vector<const Track*> judged;
+  std::vector<Eigen::Vector2d> pred;
+  std::vector<Eigen::Vector3d> pred_p;
+  std::vector<double> tol;
+  for (const Track* t : lost) {
+    Eigen::Vector2d uv;
+    Eigen::Vector3d p;
+    double tol_px;
+    if (t->length != 1 || !predictStatic(*t, prior, p, uv, tol_px)) continue;  // longer tracks were scored
+    judged.push_back(t);
+    pred.push_back(uv);
+    pred_p.push_back(p);
+    tol.push_back(tol_px);
+  }
+  out.lost_tested = judged.size();
+  if (judged.empty()) return;
+  // KLT started at the static prediction (a wider basin than the patch alignment alone).
+  std::vector<cv::Point2f> p0, p1;
+  for (std::size_t i = 0; i < judged.size(); ++i) {
+    p0.push_back(judged[i]->uv);
+    p1.emplace_back(static_cast<float>(pred[i].x()), static_cast<float>(pred[i].y()));
+  }
+  std::vector<uchar> status;
+  std::vector<float> err;
+  const cv::Size win(params_.klt_window, params_.klt_window);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations, params_.klt_epsilon);
+  cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, p0, p1, status, err, win, params_.klt_levels, crit,
+                           cv::OPTFLOW_USE_INITIAL_FLOW);
+  std::vector<std::size_t> not_found;
+  for (std::size_t i = 0; i < judged.size(); ++i) {
+    const Track& t = *judged[i];
+    double best_zncc = -1;  // best match of the first patch near the prediction
+    auto foundFrom = [&](const Eigen::Vector2d& start) {
+      AffineWarp warp{t.A_patch, start};
+      const AlignResult r = alignAffine(*t.patch, image, warp);
+      if ((warp.t - pred[i]).norm() > tol[i]) return false;
+      best_zncc = std::max(best_zncc, r.zncc);
+      return r.converged && r.zncc >= params_.min_patch_zncc;
+    };
+    if (foundFrom(pred[i])) continue;
+    if (status[i] && (toEigen(p1[i]) - pred[i]).norm() <= tol[i] && foundFrom(toEigen(p1[i]))) continue;
+    // A corner on a silhouette (half background) still half matches there: only a clear
+    // mismatch counts as moved.
+    if (best_zncc >= params_.lost_max_zncc) continue;
+    not_found.push_back(i);
+  }
+  // Occlusion: something nearer than the static point now stands where it should be (a
+  // vehicle passing in front of the background). Stereo-match the predicted pixel; when
+  // the surface there is clearly nearer, the corner is hidden, not moved: not judged.
+  if (not_found.empty()) return;
+  std::vector<uchar> hidden(not_found.size(), 0);
+  if (has_right_image_) {
+    std::vector<cv::Point2f> pl, pr;
+    for (std::size_t i : not_found) {
+      pl.emplace_back(static_cast<float>(pred[i].x()), static_cast<float>(pred[i].y()));
+      Eigen::Vector2d uv_r = pred[i];
+      cams_[1]->project(T_c1_c0_ * pred_p[i], uv_r);
+      pr.emplace_back(static_cast<float>(uv_r.x()), static_cast<float>(uv_r.y()));
+    }
+    std::vector<uchar> st;
+    cv::calcOpticalFlowPyrLK(pyr, right_pyr_, pl, pr, st, err, win, params_.klt_levels, crit,
+                             cv::OPTFLOW_USE_INITIAL_FLOW);
+    for (std::size_t j = 0; j < not_found.size(); ++j) {
+      const std::size_t i = not_found[j];
+      Eigen::Vector2d xy_l, xy_r;
+      double depth;
+      hidden[j] = st[j] && cams_[0]->liftToNormalized(pred[i], xy_l) &&
+                  cams_[1]->liftToNormalized(toEigen(pr[j]), xy_r) && stereoDepth(xy_l, xy_r, T_c1_c0_, depth) &&
+                  depth > 0 && depth < params_.lost_occlusion_ratio * pred_p[i].z();
+    }
+  }
+  for (std::size_t j = 0; j < not_found.size(); ++j) {
+    if (hidden[j]) continue;
+    const Track& t = *judged[not_found[j]];
+    Feature f = featureOf(t, FeatureLabel::kEliminated);
+    f.has_right = true;
+    f.xy_right = t.xy_right;
+    out.lost_moving.push_back(f);
   }
 }
 
@@ -168,6 +312,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   const auto start = Clock::now();
   FeatureFrame out;
   out.t_ns = frame.t_ns;
+  double lost_ms = 0;  // judging lost new corners counts as dynamic preprocessing
   std::vector<cv::Mat>& pyr = cur_pyr_;
   cv::buildOpticalFlowPyramid(frame.left, pyr, cv::Size(params_.klt_window, params_.klt_window), params_.klt_levels);
 
@@ -180,7 +325,13 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
 
   std::vector<Track> tracks;
   std::vector<PrevObs> prev;
-  trackPrevious(pyr, frame.left, tracks, prev);
+  std::vector<const Track*> lost;  // into prev_tracks_
+  trackPrevious(pyr, frame.left, tracks, prev, lost);
+  if (params_.judge_lost_new_tracks && !lost.empty()) {
+    const auto t0 = Clock::now();
+    judgeLost(pyr, frame.left, prior, lost, out);
+    lost_ms = msSince(t0);
+  }
   out.tracked = tracks.size();
   // Eliminated tracks still followed skip the filter and the output (reported as removed below).
   std::vector<Track> followed;
@@ -201,7 +352,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   const double dt = prev_pyr_.empty() ? 0.0 : toSeconds(frame.t_ns - prev_t_ns_);
 
   // Rejection filter on tracked features (before the top-up, so holes refill now).
-  double filter_ms = 0;
+  double filter_ms = lost_ms;
   std::vector<Track> removed_tracks;  // tracks behind out.removed, in the same order
   FilterContext ctx{cams_[0].get(), &prior, mask, prev_t_ns_, frame.t_ns};
   auto runFilter = [&](std::vector<Track>& list, const std::vector<PrevObs>* prev_obs, std::vector<Feature>& feats) {

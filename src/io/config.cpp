@@ -257,6 +257,8 @@ Config loadConfig(const std::string& path) {
   }
   c.dynamic.stereo.drift_mps = getDoubleOr(f, "stereo_motion_drift_mps", c.dynamic.stereo.drift_mps);
   checkPositive(f, "stereo_motion_chi2", c.dynamic.stereo.chi2);
+  if (f.root["lost_track_test"])
+    c.dynamic.lost_track_test = getInt(f, f.root, "lost_track_test", "0 or 1") != 0;
   checkPositive(f, "stereo_motion_sigma_px", c.dynamic.stereo.sigma_px);
   if (f.root["mode"]) {
     const std::string m = getString(f, f.root, "mode", modeNames());

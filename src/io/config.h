@@ -60,6 +60,12 @@ struct DynamicOptions {
   /// re-triangulated from its next observation. Config key `confirm_outliers_dynamic`.
   bool confirm_outliers = true;
   StereoMotionOptions stereo;
+  /// Session-7 extension of §4.3 (not in the paper): in idy and idy-pre, a new corner lost
+  /// in its second frame is labelled dynamic when it is not found where the motion prior
+  /// puts it as a static stereo point (frontend::TrackerParams::judge_lost_new_tracks).
+  /// Labels and dynamic map only: such a corner never constrains the estimate.
+  /// Config key `lost_track_test`.
+  bool lost_track_test = true;
 };
 
 /// Whole-system configuration.
