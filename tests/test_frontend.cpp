@@ -36,6 +36,23 @@ sim::SimOptions options(const std::string& scene, sim::Level level, double durat
   return o;
 }
 
+/// A city street without traffic plus one vehicle crossing it along +y, textured as vehicle 1.
+sim::Scene crossingVehicleScene(double duration_s, const std::string& type, const Vector3d& size,
+                                const Vector3d& lane_start, double speed) {
+  return sim::Scene(options("city", sim::Level::kNone, duration_s), [&](sim::World& w, const sim::TextureBank& tex) {
+    sim::Vehicle v;
+    v.id = 1;
+    v.type = type;
+    v.size = size;
+    v.lane_start = lane_start;
+    v.lane_dir = Vector3d::UnitY();
+    v.lane_length = 400;
+    v.speed = speed;
+    v.texture = tex.index(sim::TextureKind::kVehicle, 1);
+    w.vehicles.push_back(v);
+  });
+}
+
 /// Depth at a subpixel position when the 3x3 neighbourhood lies on one smooth surface.
 bool smoothDepth(const cv::Mat& depth, const Vector2d& uv, double& z, int r = 2) {
   const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
@@ -259,18 +276,8 @@ TEST(FeatureTracker, LostNewCornersAwayFromTheirStaticPredictionAreJudgedMoving)
   // its new corners are lost in their second frame. Static corners lost at the same time
   // (leaving the image, hidden by the truck) must mostly be found where the prior puts them
   // or be recognised as hidden (something nearer stands there now).
-  const sim::Scene scene(options("city", sim::Level::kNone, 3.0), [](sim::World& w, const sim::TextureBank& tex) {
-    sim::Vehicle v;
-    v.id = 1;
-    v.type = "truck";
-    v.size = Vector3d(8.0, 2.5, 3.0);
-    v.lane_start = Vector3d(9.0, -30.0, 0.0);
-    v.lane_dir = Vector3d::UnitY();
-    v.lane_length = 400;
-    v.speed = 20.0;
-    v.texture = tex.index(sim::TextureKind::kVehicle, 1);
-    w.vehicles.push_back(v);
-  });
+  const sim::Scene scene =
+      crossingVehicleScene(3.0, "truck", Vector3d(8.0, 2.5, 3.0), Vector3d(9.0, -30.0, 0.0), 20.0);
   for (const bool judge : {true, false}) {
     TrackerParams params;
     params.judge_lost_new_tracks = judge;
@@ -339,18 +346,8 @@ TEST(Rejection, SegDropsExactlyTheFeaturesOnMaskedPixels) {
 
 TEST(Rejection, RansacRejectsMostFeaturesOnACrossingVehicle) {
   // A car crosses the static street 15-20 m ahead of the drone.
-  const sim::Scene scene(options("city", sim::Level::kNone, 4.0), [](sim::World& w, const sim::TextureBank& tex) {
-    sim::Vehicle v;
-    v.id = 1;
-    v.type = "car";
-    v.size = Vector3d(4.5, 1.8, 1.5);
-    v.lane_start = Vector3d(20.0, -14.0, 0.0);
-    v.lane_dir = Vector3d::UnitY();
-    v.lane_length = 400;
-    v.speed = 6.0;
-    v.texture = tex.index(sim::TextureKind::kVehicle, 1);
-    w.vehicles.push_back(v);
-  });
+  const sim::Scene scene =
+      crossingVehicleScene(4.0, "car", Vector3d(4.5, 1.8, 1.5), Vector3d(20.0, -14.0, 0.0), 6.0);
   FeatureTracker tracker(scene.rig());
   RansacFilter ransac(scene.rig().tracker.f_threshold);
   std::size_t on_vehicle = 0, on_vehicle_rejected = 0, static_total = 0, static_rejected = 0;
