@@ -73,7 +73,7 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Ma
   cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, p0, p1, status, err, win, params_.klt_levels, crit);
   if (config_.tracker.flow_back) {
     back = p0;
-    cv::calcOpticalFlowPyrLK(pyr, prev_pyr_, p1, back, status_back, err, win, params_.klt_levels, crit,
+    cv::calcOpticalFlowPyrLK(pyr, prev_pyr_, p1, back, status_back, err, win, params_.klt_back_levels, crit,
                              cv::OPTFLOW_USE_INITIAL_FLOW);
   }
   for (std::size_t i = 0; i < p0.size(); ++i) {
@@ -284,7 +284,7 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
   cv::calcOpticalFlowPyrLK(left_pyr, right_pyr, pl, pr, status, err, win, params_.klt_levels);
   if (config_.tracker.flow_back) {
     back = pl;
-    cv::calcOpticalFlowPyrLK(right_pyr, left_pyr, pr, back, status_back, err, win, params_.klt_levels,
+    cv::calcOpticalFlowPyrLK(right_pyr, left_pyr, pr, back, status_back, err, win, params_.klt_back_levels,
                              cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01),
                              cv::OPTFLOW_USE_INITIAL_FLOW);
   }

@@ -22,6 +22,9 @@ namespace idyvins::frontend {
 struct TrackerParams {
   int klt_window = 13;  ///< px; smaller than VINS-Fusion's 21: less drift under perspective change (measured)
   int klt_levels = 4;  ///< 13 px window: capture range about VINS-Fusion's 21 px x 3 levels (session 7)
+  /// Pyramid levels of the backward checks: they start at the forward start point, so a
+  /// narrow basin suffices (VINS-Fusion uses 1 for its reverse check).
+  int klt_back_levels = 1;
   int klt_iterations = 30;     ///< KLT stops after this many iterations ...
   double klt_epsilon = 0.01;   ///< ... or when the update is below this (px)
   double flow_back_px = 0.5;       ///< max forward-backward distance
