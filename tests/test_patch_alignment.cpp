@@ -84,5 +84,19 @@ TEST(PatchAlignment, RejectsFlatPatchesAndPatchesOffTheImage) {
   EXPECT_FALSE(alignAffine(tmpl, image, warp).converged);
 }
 
+TEST(PatchZncc, OneForTheSameSurfaceUnderGainAndShiftLowForAnotherAndMinusOneOffTheImage) {
+  const cv::Mat image = texture(7);
+  // The same surface 12.25 px to the right, with another gain and bias (a stereo pair).
+  cv::Mat shifted = warped(image, Eigen::Matrix2d::Identity(), {100, 100}, {12.25, 0});
+  shifted.convertTo(shifted, CV_8U, 0.7, 30);
+  EXPECT_GT(patchZncc(image, {100, 100}, shifted, {112.25, 100}, 7), 0.98);
+  // Off by 4 px (a neighbouring surface), another texture (an occluder), off the image.
+  EXPECT_LT(patchZncc(image, {100, 100}, shifted, {116.25, 100}, 7), 0.8);
+  EXPECT_LT(patchZncc(image, {100, 100}, texture(8), {100, 100}, 7), 0.5);
+  EXPECT_EQ(patchZncc(image, {100, 100}, shifted, {195, 100}, 7), -1.0);
+  const cv::Mat flat(200, 200, CV_8U, cv::Scalar(128));
+  EXPECT_EQ(patchZncc(image, {100, 100}, flat, {100, 100}, 7), -1.0);
+}
+
 }  // namespace
 }  // namespace idyvins::frontend

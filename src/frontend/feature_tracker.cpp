@@ -301,6 +301,9 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
     const Eigen::Vector3d line = E_c1_c0_ * x0;
     const double dist = std::abs(x1.dot(line)) / std::max(line.head<2>().norm(), 1e-12);
     if (dist * f > params_.stereo_epipolar_px) continue;
+    if (params_.stereo_min_zncc > -1.0 &&
+        patchZncc(left_pyr[0], feat.uv, right_pyr[0], toEigen(pr[i]), params_.patch_half) < params_.stereo_min_zncc)
+      continue;
     feat.has_right = true;
     feat.uv_right = toEigen(pr[i]);
     feat.xy_right = xy_r;

@@ -29,6 +29,11 @@ struct TrackerParams {
   double klt_epsilon = 0.01;   ///< ... or when the update is below this (px)
   double flow_back_px = 0.5;       ///< max forward-backward distance
   double stereo_epipolar_px = 2.0; ///< max distance of a right match to its epipolar line
+  /// A right match whose patch correlates worse than this with the left one (ZNCC of the
+  /// patch_half patches) is dropped. Measured on city high: it drops 4 % of the static
+  /// corners' matches, 2.8x as often wrong (> 1 px or hidden) and 1.9x as often beside a
+  /// vehicle as the rest. -1 switches the check off.
+  double stereo_min_zncc = 0.8;
   int border_px = 1;
   /// Keep following features the filter eliminated (IDY modes): they are reported in
   /// FeatureFrame::removed every frame and never output as features again, but they

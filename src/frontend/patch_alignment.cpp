@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 
 namespace idyvins::frontend {
 
@@ -38,6 +39,35 @@ bool normalize(std::vector<float>& v) {
 }
 
 }  // namespace
+
+double patchZncc(const cv::Mat& a, const Eigen::Vector2d& uv_a, const cv::Mat& b, const Eigen::Vector2d& uv_b,
+                 int half) {
+  const auto inside = [half](const cv::Mat& m, const Eigen::Vector2d& uv) {
+    return uv.x() - half >= 0.0 && uv.y() - half >= 0.0 && uv.x() + half < m.cols - 1 && uv.y() + half < m.rows - 1;
+  };
+  if (!inside(a, uv_a) || !inside(b, uv_b)) return -1.0;
+  const int n = 2 * half + 1;
+  cv::Mat pa, pb;  // bilinear patches centred on the points (OpenCV's vectorized resampling)
+  cv::getRectSubPix(a, cv::Size(n, n), cv::Point2f(static_cast<float>(uv_a.x()), static_cast<float>(uv_a.y())), pa,
+                    CV_32F);
+  cv::getRectSubPix(b, cv::Size(n, n), cv::Point2f(static_cast<float>(uv_b.x()), static_cast<float>(uv_b.y())), pb,
+                    CV_32F);
+  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+  const float* xa = pa.ptr<float>();
+  const float* xb = pb.ptr<float>();
+  const int count = n * n;
+  for (int k = 0; k < count; ++k) {
+    sa += xa[k];
+    sb += xb[k];
+    saa += static_cast<double>(xa[k]) * xa[k];
+    sbb += static_cast<double>(xb[k]) * xb[k];
+    sab += static_cast<double>(xa[k]) * xb[k];
+  }
+  const double va = saa - sa * sa / count, vb = sbb - sb * sb / count;
+  // Below ~1 gray level of standard deviation there is nothing to correlate (as normalize()).
+  if (va < count || vb < count) return -1.0;
+  return (sab - sa * sb / count) / std::sqrt(va * vb);
+}
 
 PatchTemplate makePatchTemplate(const cv::Mat& image, const Eigen::Vector2d& uv_center, int half) {
   PatchTemplate tmpl;

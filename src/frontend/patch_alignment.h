@@ -56,4 +56,11 @@ PatchTemplate makePatchTemplate(const cv::Mat& image, const Eigen::Vector2d& uv_
 AlignResult alignAffine(const PatchTemplate& tmpl, const cv::Mat& image, AffineWarp& warp,
                         const AlignOptions& options = {});
 
+/// Zero-mean normalized cross-correlation of the (2 half + 1)² patches (bilinear) around
+/// `uv_a` in `a` and `uv_b` in `b` (CV_8UC1); -1 when a patch leaves its image or is flat.
+/// Gain and bias invariant, no warp: for two views of the same surface seen alike
+/// (a stereo match).
+double patchZncc(const cv::Mat& a, const Eigen::Vector2d& uv_a, const cv::Mat& b, const Eigen::Vector2d& uv_b,
+                 int half);
+
 }  // namespace idyvins::frontend
