@@ -321,6 +321,26 @@ TEST(StereoMotionTest, SeesMotionAlongTheEpipolarLineThatDsCannot) {
   EXPECT_FALSE(stereoMotionError(a.l, a.r, s.l, s.r, Eigen::Isometry3d::Identity(), R, t, 0, kF, 0.25).valid);
 }
 
+TEST(StereoMotionTest, LeftResidualAloneSeparatesABadRightMatchFromMotion) {
+  // Same rig and car as above. A static point whose current right match is 3 px off (the
+  // true one hidden behind a vehicle, KLT settling on the silhouette) fails the 4-dof test
+  // like the moving car, but only the car's left-image residual disagrees with the prior.
+  const auto T_r_l = rightFromLeft();
+  const Matrix3d R = Matrix3d::Identity();
+  const Vector3d t(0, 0, 0.5);
+  const Vector3d p_prev(2.0, 0.5, 8.0);
+  const StereoPair a = observe(p_prev, T_r_l), s = observe(R.transpose() * (p_prev - t), T_r_l),
+                   mv = observe(R.transpose() * (p_prev + Vector3d(0, 0, 0.4) - t), T_r_l);
+  const double sigma_p2 = 0.01 * 0.01, left_gate = 13.82;  // χ²₂ 99.9 %
+  const auto bad_right = stereoMotionError(a.l, a.r, s.l, s.r + Vector2d(3.0 / kF, 0), T_r_l, R, t, sigma_p2, kF, 0.25);
+  const auto moving = stereoMotionError(a.l, a.r, mv.l, mv.r, T_r_l, R, t, sigma_p2, kF, 0.25);
+  std::printf("bad right match: chi2 %.1f, left %.3f; moving car: chi2 %.1f, left %.1f\n", bad_right.chi2,
+              bad_right.chi2_left, moving.chi2, moving.chi2_left);
+  EXPECT_GT(bad_right.chi2, 18.47);
+  EXPECT_LT(bad_right.chi2_left, 1e-6);
+  EXPECT_GT(moving.chi2_left, left_gate);
+}
+
 TEST(IdyFilter, StereoTestMarksOnFirstFailureAndRemovesOnSecond) {
   const auto cam = pinholeCamera();
   const auto T_r_l = rightFromLeft();

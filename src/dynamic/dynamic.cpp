@@ -92,6 +92,8 @@ StereoMotionError stereoMotionError(const Vector2d& x0_l, const Vector2d& x0_r, 
                             sigma_rho * sigma_rho * J_rho * J_rho.transpose() + sigma_p2 * J_t * J_t.transpose();
   out.valid = true;
   out.chi2 = r.dot(C.ldlt().solve(r));
+  const Eigen::Vector2d r_l = r.head<2>();
+  out.chi2_left = r_l.dot(C.topLeftCorner<2, 2>().ldlt().solve(r_l));
   out.residual_px2 = r.squaredNorm();
   out.depth = 1.0 / rho;
   return out;
@@ -240,6 +242,7 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
     if (!e.valid) continue;
     it.feature->stereo_chi2 = e.chi2;
     if (e.chi2 <= o_.stereo.chi2) continue;
+    if (o_.stereo.left_chi2 > 0 && e.chi2_left <= o_.stereo.left_chi2) continue;  // only the right match disagrees
     kept.strikes = strikes_before + 1;
     if (kept.strikes < o_.stereo.strikes) {  // a first failure only marks (one bad match is not motion)
       if (it.feature->label != frontend::FeatureLabel::kCandidate) {

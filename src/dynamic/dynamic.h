@@ -48,6 +48,7 @@ double epipolarErrorPx2(const Eigen::Vector2d& x0, const Eigen::Vector2d& x1, co
 struct StereoMotionError {
   bool valid = false;   ///< false: not triangulable in front of both cameras
   double chi2 = 0;      ///< rᵀ C⁻¹ r
+  double chi2_left = 0; ///< the same for the left image's 2 residuals alone (χ², 2 dof)
   double residual_px2 = 0;  ///< ‖r‖²
   double depth = 0;     ///< triangulated depth in frame k (m)
 };

@@ -256,6 +256,7 @@ Config loadConfig(const std::string& path) {
     checkPositive(f, "stereo_motion_anchor_frames", c.dynamic.stereo.anchor_frames);
   }
   c.dynamic.stereo.drift_mps = getDoubleOr(f, "stereo_motion_drift_mps", c.dynamic.stereo.drift_mps);
+  c.dynamic.stereo.left_chi2 = getDoubleOr(f, "stereo_motion_left_chi2", c.dynamic.stereo.left_chi2);
   checkPositive(f, "stereo_motion_chi2", c.dynamic.stereo.chi2);
   if (f.root["lost_track_test"])
     c.dynamic.lost_track_test = getInt(f, f.root, "lost_track_test", "0 or 1") != 0;

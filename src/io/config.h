@@ -48,6 +48,10 @@ struct StereoMotionOptions {
   int anchor_frames = 10;      ///< `stereo_motion_anchor_frames`: compare with the stereo
                                ///< observation up to this many frames back (1 = previous frame)
   double drift_mps = 0.02;     ///< `stereo_motion_drift_mps`: drift of the chained priors
+  /// `stereo_motion_left_chi2`: a failure whose left-image residual alone is within this
+  /// (χ², 2 dof; 13.82 = 99.9 %) is not counted (the right match is suspect: hidden, or at a
+  /// silhouette). 0 = off, the default: measured in session 10, see the README.
+  double left_chi2 = 0.0;
 };
 
 struct DynamicOptions {
