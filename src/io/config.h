@@ -49,9 +49,9 @@ struct StereoMotionOptions {
                                ///< observation up to this many frames back (1 = previous frame)
   double drift_mps = 0.02;     ///< `stereo_motion_drift_mps`: drift of the chained priors
   /// `stereo_motion_left_chi2`: a failure whose left-image residual alone is within this
-  /// (χ², 2 dof; 13.82 = 99.9 %) is not counted (the right match is suspect: hidden, or at a
-  /// silhouette). 0 = off, the default: measured in session 10, see the README.
-  double left_chi2 = 0.0;
+  /// (χ², 2 dof; 5.99 = 95 %) is not counted (the right match is suspect: hidden, or at a
+  /// silhouette). 0 = off. 5.99 measured in sessions 10–11 (13.82 cost recall), see the README.
+  double left_chi2 = 5.99;
 };
 
 struct DynamicOptions {
