@@ -413,6 +413,70 @@ TEST(IdyFilter, StereoTestMarksOnFirstFailureAndRemovesOnSecond) {
   EXPECT_EQ(fresh.lastStats().stereo_tested, points.size() - 1);
 }
 
+TEST(IdyFilter, LeftGateSparesStaticPointsWhoseRightMatchAloneIsOff) {
+  // 40 static points, 10 of them (ids 1–10) with a right match 3 px off in every new frame
+  // (the true one hidden, KLT on a silhouette), and the car of the test above (id 0).
+  const auto cam = pinholeCamera();
+  const auto T_r_l = rightFromLeft();
+  const frontend::MotionPrior prior = forwardPrior(0.5, 1e-6);
+  IdyOptions gated;
+  gated.stereo.enabled = true;
+  gated.T_r_l = T_r_l;
+  ASSERT_DOUBLE_EQ(gated.stereo.left_chi2, 5.99);  // the default
+  IdyOptions ungated = gated;
+  ungated.stereo.left_chi2 = 0;  // 0 = off
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Vector3d> start(41);
+  for (auto& p : start) p = Vector3d(4 * u(rng), 2 * u(rng), 6 + 4 * (u(rng) + 1));
+  start[0] = Vector3d(2.0, 0.5, 8.0);
+  const frontend::FilterContext ctx{cam.get(), &prior, nullptr, 0, 50'000'000};
+  auto run = [&](const IdyOptions& o) {
+    IdyFilter filter(o);
+    std::vector<Vector3d> points = start;
+    std::vector<frontend::Feature> feats(points.size());
+    std::vector<frontend::FilterItem> items(points.size());
+    std::vector<frontend::FeatureLabel> labels(points.size());
+    std::vector<bool> removed(points.size(), false);
+    for (int frame = 0; frame < 2; ++frame) {
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const Vector3d p_cur = points[i] + Vector3d(0, 0, i == 0 ? 0.4 : 0.0) - prior.t_prev_cur;
+        const StereoPair a = observe(points[i], T_r_l), b = observe(p_cur, T_r_l);
+        feats[i] = {};
+        feats[i].id = i;
+        feats[i].xy = b.l;
+        feats[i].has_right = true;
+        feats[i].xy_right = b.r + (i >= 1 && i <= 10 ? Vector2d(3.0 / kF, 0) : Vector2d::Zero());
+        items[i] = {};
+        items[i].feature = &feats[i];
+        items[i].tracked = true;
+        items[i].prev_xy = a.l;
+        items[i].prev_has_right = true;
+        items[i].prev_xy_right = a.r;
+        points[i] = p_cur;
+      }
+      filter.apply(ctx, items);
+      for (std::size_t i = 0; i < points.size(); ++i) removed[i] = removed[i] || items[i].remove;
+    }
+    for (std::size_t i = 0; i < points.size(); ++i) labels[i] = feats[i].label;
+    return std::make_pair(removed, labels);
+  };
+  const auto [removed_gated, labels_gated] = run(gated);
+  const auto [removed_ungated, labels_ungated] = run(ungated);
+  EXPECT_TRUE(removed_gated[0]);  // the car: its left residual disagrees too
+  EXPECT_TRUE(removed_ungated[0]);
+  int bad_removed_ungated = 0;
+  for (std::size_t i = 1; i < start.size(); ++i) {
+    EXPECT_FALSE(removed_gated[i]) << i;
+    EXPECT_EQ(labels_gated[i], frontend::FeatureLabel::kStatic) << i;
+    if (i > 10) {
+      EXPECT_FALSE(removed_ungated[i]) << i;
+    }
+    bad_removed_ungated += (i <= 10 && removed_ungated[i]) ? 1 : 0;
+  }
+  EXPECT_EQ(bad_removed_ungated, 10);  // without the gate two bad right matches remove a static point
+}
+
 TEST(IdyFilter, AnchoredStereoTestSeesSlowMotionAlongTheLineOfSight) {
   // A truck 25 m ahead drives away 0.15 m per frame while the camera moves 0.1 m per
   // frame forward: per frame its image motion stays within the stereo depth noise, but
