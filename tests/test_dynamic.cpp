@@ -259,6 +259,22 @@ StereoPair observe(const Vector3d& p_left, const Eigen::Isometry3d& T_r_l) {
   return {project(p_left), project(T_r_l * p_left)};
 }
 
+/// Feature `id`, tracked with a right match in both frames: `prev` before, `cur` now.
+void trackedStereo(std::size_t id, const StereoPair& prev, const StereoPair& cur, frontend::Feature& feat,
+                   frontend::FilterItem& item) {
+  feat = {};
+  feat.id = id;
+  feat.xy = cur.l;
+  feat.has_right = true;
+  feat.xy_right = cur.r;
+  item = {};
+  item.feature = &feat;
+  item.tracked = true;
+  item.prev_xy = prev.l;
+  item.prev_has_right = true;
+  item.prev_xy_right = prev.r;
+}
+
 TEST(StereoMotionTest, StaticPointsGiveZeroAndNoiseGivesFourDof) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -365,16 +381,7 @@ TEST(IdyFilter, StereoTestMarksOnFirstFailureAndRemovesOnSecond) {
     for (std::size_t i = 0; i < points.size(); ++i) {
       const Vector3d p_prev = points[i];
       const Vector3d p_cur = p_prev + Vector3d(0, 0, i == 0 ? 0.4 : 0.0) - prior.t_prev_cur;
-      const StereoPair a = observe(p_prev, T_r_l), b = observe(p_cur, T_r_l);
-      feats[i].id = i;
-      feats[i].xy = b.l;
-      feats[i].has_right = true;
-      feats[i].xy_right = b.r;
-      items[i].feature = &feats[i];
-      items[i].tracked = true;
-      items[i].prev_xy = a.l;
-      items[i].prev_has_right = true;
-      items[i].prev_xy_right = a.r;
+      trackedStereo(i, observe(p_prev, T_r_l), observe(p_cur, T_r_l), feats[i], items[i]);
     }
     for (auto& p : points) p = p - prior.t_prev_cur + (&p == &points[0] ? Vector3d(0, 0, 0.4) : Vector3d::Zero());
   };
@@ -441,18 +448,9 @@ TEST(IdyFilter, LeftGateSparesStaticPointsWhoseRightMatchAloneIsOff) {
     for (int frame = 0; frame < 2; ++frame) {
       for (std::size_t i = 0; i < points.size(); ++i) {
         const Vector3d p_cur = points[i] + Vector3d(0, 0, i == 0 ? 0.4 : 0.0) - prior.t_prev_cur;
-        const StereoPair a = observe(points[i], T_r_l), b = observe(p_cur, T_r_l);
-        feats[i] = {};
-        feats[i].id = i;
-        feats[i].xy = b.l;
-        feats[i].has_right = true;
-        feats[i].xy_right = b.r + (i >= 1 && i <= 10 ? Vector2d(3.0 / kF, 0) : Vector2d::Zero());
-        items[i] = {};
-        items[i].feature = &feats[i];
-        items[i].tracked = true;
-        items[i].prev_xy = a.l;
-        items[i].prev_has_right = true;
-        items[i].prev_xy_right = a.r;
+        StereoPair b = observe(p_cur, T_r_l);
+        if (i >= 1 && i <= 10) b.r += Vector2d(3.0 / kF, 0);
+        trackedStereo(i, observe(points[i], T_r_l), b, feats[i], items[i]);
         points[i] = p_cur;
       }
       filter.apply(ctx, items);
@@ -516,17 +514,8 @@ TEST(IdyFilter, AnchoredStereoTestSeesSlowMotionAlongTheLineOfSight) {
         points[i] += Vector3d(0, 0, i == 0 ? 0.15 : 0.0) - prior.t_prev_cur;
         if (gone[i]) continue;
         const StereoPair ob = observe(points[i], T_r_l);
-        feats[i] = {};
-        feats[i].id = i;
-        feats[i].xy = nz(ob.l);
-        feats[i].has_right = true;
-        feats[i].xy_right = nz(ob.r);
         frontend::FilterItem it;
-        it.feature = &feats[i];
-        it.tracked = true;
-        it.prev_xy = prev[i].l;
-        it.prev_has_right = true;
-        it.prev_xy_right = prev[i].r;
+        trackedStereo(i, prev[i], StereoPair{nz(ob.l), nz(ob.r)}, feats[i], it);  // braces: left noise first
         live.push_back(it);
         ids.push_back(i);
         prev[i] = {feats[i].xy, feats[i].xy_right};
