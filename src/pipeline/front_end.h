@@ -1,0 +1,46 @@
+#pragma once
+// The front end as the system runs it for a mode (DESIGN §4.8): the stereo KLT tracker
+// with the mode's tracker settings and rejection filter (none, F-RANSAC, ground-truth
+// masks, or the IDY filter). `idyvins track` and pipeline::System share it.
+
+#include <memory>
+#include <optional>
+
+#include "dynamic/dynamic.h"
+#include "frontend/feature_filter.h"
+#include "frontend/feature_tracker.h"
+#include "io/config.h"
+
+namespace idyvins::pipeline {
+
+/// True for the modes that run the IDY front-end filter (idy, idy-pre, idy-ba).
+bool usesIdyFilter(Mode mode);
+
+/// The mode's rejection filter built from the config: null for baseline.
+std::unique_ptr<frontend::FeatureFilter> makeFilter(Mode mode, const Config& config);
+
+/// Tracker settings of a mode: idy and idy-pre keep following eliminated features and,
+/// with `lost_track_test`, judge new corners lost in their second frame (DESIGN §4.9).
+frontend::TrackerParams trackerParamsFor(Mode mode, const Config& config);
+
+/// Tracker + filter of one mode; one instance per sequence.
+class FrontEnd {
+ public:
+  FrontEnd(const Config& config, Mode mode);
+  /// Tracks one stereo frame. `prior` is used by the IDY filter (invalid: frame unfiltered);
+  /// in seg mode the frame's left_mask must be set (InputError otherwise).
+  frontend::FeatureFrame track(const StereoFrame& frame, const frontend::MotionPrior& prior);
+  /// The IDY filter's statistics of the last frame (idy modes), else nullopt.
+  std::optional<dynamic::FrameStats> idyStats() const;
+  /// Drops every track (after an estimator reset).
+  void reset() { tracker_.reset(); }
+  Mode mode() const { return mode_; }
+
+ private:
+  Mode mode_;
+  frontend::FeatureTracker tracker_;
+  std::unique_ptr<frontend::FeatureFilter> filter_;
+  const dynamic::IdyFilter* idy_ = nullptr;  ///< filter_ when it is the IDY filter
+};
+
+}  // namespace idyvins::pipeline

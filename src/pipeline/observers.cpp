@@ -1,0 +1,142 @@
+#include "pipeline/observers.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+#include "core/error.h"
+
+namespace idyvins::pipeline {
+namespace {
+
+/// d_s histogram: 1 px² bins from 0 to 20, then one overflow bin.
+std::vector<int> histogram(const std::vector<double>& d) {
+  std::vector<int> h(21, 0);
+  for (double v : d) ++h[std::min(20, static_cast<int>(v))];
+  return h;
+}
+
+std::unordered_set<std::uint64_t> confirmedIds(const Result& result) {
+  std::unordered_set<std::uint64_t> ids;
+  for (const auto& p : result.dynamic_map)
+    if (p.label == 2) ids.insert(p.id);
+  return ids;
+}
+
+}  // namespace
+
+void ObservationRecorder::onFrame(const StereoFrame& input, const FrameOutput& output) {
+  const cv::Mat& mask = input.left_mask;
+  auto on_moving = [&](const frontend::Feature& f) {
+    if (!has_masks_ || mask.empty()) return false;
+    const int u = static_cast<int>(std::lround(f.uv.x())), v = static_cast<int>(std::lround(f.uv.y()));
+    return mask.at<std::uint8_t>(std::clamp(v, 0, mask.rows - 1), std::clamp(u, 0, mask.cols - 1)) != 0;
+  };
+  const float cred = output.idy ? static_cast<float>(output.idy->credibility) : 0.f;
+  auto record = [&](const frontend::Feature& f) {
+    observations_.push_back({f.id, on_moving(f), output.t_ns, static_cast<float>(f.uv.x()),
+                             static_cast<float>(f.uv.y()), static_cast<float>(f.score), cred,
+                             static_cast<float>(f.stereo_chi2), f.label, f.track_length});
+  };
+  for (const auto& f : output.features.features) record(f);
+  for (const auto& f : output.features.removed) record(f);  // label kEliminated
+  for (const auto& f : output.features.lost_moving) lost_moving_ids_.insert(f.id);
+  outlier_ids_.insert(output.estimate.outlier_ids.begin(), output.estimate.outlier_ids.end());
+}
+
+void ObservationRecorder::relabelLostMoving() {
+  for (auto& o : observations_)
+    if (lost_moving_ids_.count(o.id)) o.label = frontend::FeatureLabel::kEliminated;
+}
+
+eval::DynamicClassification ObservationRecorder::classify(const Result& result) {
+  relabelLostMoving();
+  std::vector<eval::MaskedObservation> masked;
+  masked.reserve(observations_.size());
+  for (const auto& o : observations_)
+    masked.push_back({o.id, o.on_moving, o.label == frontend::FeatureLabel::kEliminated});
+  std::vector<std::uint64_t> static_ids;
+  for (const auto& p : result.static_map) static_ids.push_back(p.id);
+  return eval::classifyDynamic(masked, confirmedIds(result), static_ids);
+}
+
+void ObservationRecorder::writeCsv(const std::string& path, const Result& result) {
+  relabelLostMoving();
+  const std::unordered_set<std::uint64_t> confirmed = confirmedIds(result);
+  std::unordered_set<std::uint64_t> in_static;
+  for (const auto& p : result.static_map) in_static.insert(p.id);
+  std::ofstream f(path);
+  if (!f) throw InputError(path, "cannot write file");
+  f << "t_ns,id,u,v,track_length,frontend_label,d_s_px2,credibility,stereo_chi2,on_moving,confirmed_dynamic,"
+       "in_static_map,outlier_removed\n";
+  static const char* kLabels[] = {"static", "candidate", "eliminated"};
+  for (const auto& o : observations_)
+    f << o.t_ns << ',' << o.id << ',' << o.u << ',' << o.v << ',' << o.track_length << ','
+      << kLabels[static_cast<int>(o.label)] << ',' << o.d_s << ',' << o.credibility << ',' << o.stereo_chi2 << ','
+      << (has_masks_ ? (o.on_moving ? "1" : "0") : "") << ',' << confirmed.count(o.id) << ','
+      << in_static.count(o.id) << ',' << outlier_ids_.count(o.id) << '\n';
+  if (!f) throw InputError(path, "write failed");
+}
+
+nlohmann::json toJson(const eval::DynamicClassification& c) {
+  return {{"observations_on_moving", c.observations_on_moving},
+          {"observations_static", c.observations_static},
+          {"moving_detected_fraction", c.recall},
+          {"moving_detected_fraction_tracked", c.recall_tracked},
+          {"static_flagged_fraction", c.static_flagged},
+          {"precision", c.precision},
+          {"recall", c.recall},
+          {"f1", c.f1},
+          {"static_map_points_on_moving", c.static_map_on_moving},
+          {"static_map_fraction_on_moving", c.static_map_fraction_on_moving},
+          {"static_map_points_ever_on_moving", c.static_map_ever_on_moving},
+          {"static_map_fraction_ever_on_moving", c.static_map_fraction_ever_on_moving}};
+}
+
+void StatsRecorder::onFrame(const StereoFrame&, const FrameOutput& out) {
+  const frontend::FeatureFrame& ff = out.features;
+  const backend::FrameResult& r = out.estimate;
+  nlohmann::json dyn = nullptr;
+  if (out.idy) {
+    const dynamic::FrameStats& st = *out.idy;
+    dyn = {{"prior", st.prior_valid},
+           {"credibility", st.credibility},
+           {"tracked", st.tracked},
+           {"eliminated", st.eliminated},
+           {"candidates", st.candidates},
+           {"cv_before", st.cv_before},
+           {"cv_after", st.cv_after},
+           {"stop_rule", st.stop_rule},
+           {"d_s_hist", histogram(st.d_s)},
+           {"d_s_hist_kept", histogram(st.d_s_kept)},
+           {"candidates_in_window", r.candidates},
+           {"confirmed_dynamic", r.confirmed_dynamic},
+           {"outliers_confirmed_dynamic", r.outliers_confirmed},
+           {"stereo_tested", st.stereo_tested},
+           {"stereo_eliminated", st.stereo_eliminated},
+           {"lost_tested", ff.lost_tested},
+           {"lost_moving", ff.lost_moving.size()},
+           {"cleared", r.cleared}};
+  }
+  frames_.push_back({{"t_ns", r.t_ns},
+                     {"dynamic", dyn},
+                     {"tracking_ms", ff.tracking_ms},
+                     {"filter_ms", ff.filter_ms},
+                     {"optimization_ms", r.optimization_ms},
+                     {"marginalization_ms", r.marginalization_ms},
+                     {"features", ff.features.size()},
+                     {"removed", ff.removed.size()},
+                     {"landmarks", r.landmarks},
+                     {"keyframe", r.keyframe},
+                     {"initialized", r.initialized},
+                     {"status", r.status}});
+}
+
+const std::vector<std::string>& timingFields() {
+  static const std::vector<std::string> kFields = {
+      "wall_s",          "realtime_factor",  "mean_tracking_ms",   "mean_filter_ms", "mean_optimization_ms",
+      "mean_marginalization_ms", "tracking_ms", "filter_ms", "optimization_ms", "marginalization_ms"};
+  return kFields;
+}
+
+}  // namespace idyvins::pipeline
