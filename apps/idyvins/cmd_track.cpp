@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "core/error.h"
 #include "frontend/feature_tracker.h"
+#include "pipeline/front_end.h"
 #include "io/config.h"
 #include "io/data_source.h"
 #include "progress.h"
@@ -26,15 +27,12 @@ int runTrack(const TrackArgs& a) {
     throw CLI::ValidationError("--mode", "expected baseline|ransac|seg for the front end alone, got '" + a.mode + "'");
   io::EurocSource source(io::readEurocDataset(a.dataset), config.image_width, config.image_height,
                          mode == Mode::kSeg);
-  std::unique_ptr<frontend::FeatureFilter> filter;
-  if (mode == Mode::kRansac) filter = std::make_unique<frontend::RansacFilter>(config.tracker.f_threshold);
-  if (mode == Mode::kSeg) filter = std::make_unique<frontend::SegFilter>();
   if (!a.save_tracks.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(a.save_tracks, ec);
     if (ec) throw InputError(a.save_tracks, "cannot create folder: " + ec.message());
   }
-  frontend::FeatureTracker tracker(config);
+  pipeline::FrontEnd front_end(config, mode);  // the front end exactly as `run` uses it
   const std::size_t total = a.max_frames ? std::min(a.max_frames, source.frameCount()) : source.frameCount();
   ProgressBar bar("track", total, "frames");
   std::size_t frames = 0, features = 0, stereo = 0, removed = 0;
@@ -44,8 +42,7 @@ int runTrack(const TrackArgs& a) {
     if (!m) break;
     const auto* f = std::get_if<StereoFrame>(&*m);
     if (!f) continue;
-    const frontend::FeatureFrame out =
-        tracker.track(*f, frontend::MotionPrior{}, filter.get(), f->left_mask.empty() ? nullptr : &f->left_mask);
+    const frontend::FeatureFrame out = front_end.track(*f, frontend::MotionPrior{});
     ++frames;
     features += out.features.size();
     for (const auto& ft : out.features) stereo += ft.has_right;
