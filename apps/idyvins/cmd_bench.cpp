@@ -70,35 +70,29 @@ std::string fmt(double v, int digits = 3) {
   return b;
 }
 
-int runBench(const BenchArgs& a) {
-  if (a.suite != "standard") throw CLI::ValidationError("--suite", "only 'standard' exists");
+std::vector<int> parseSeeds(const std::string& text) {
   std::vector<int> seeds;
-  {
-    std::stringstream ss(a.seeds);
-    std::string item;
-    while (std::getline(ss, item, ',')) {
-      try {
-        seeds.push_back(std::stoi(item));
-      } catch (const std::exception&) {
-        throw CLI::ValidationError("--seeds", "expected integers like 1,2,3, got '" + item + "'");
-      }
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      seeds.push_back(std::stoi(item));
+    } catch (const std::exception&) {
+      throw CLI::ValidationError("--seeds", "expected integers like 1,2,3, got '" + item + "'");
     }
   }
-  const std::string exe = self();
-  const fs::path out(a.out), data = a.data.empty() ? out / "data" : fs::path(a.data), runs = out / "runs";
-  std::error_code ec;
-  fs::create_directories(runs, ec);
-  fs::create_directories(data, ec);
-  if (ec) throw InputError(a.out, "cannot create folder: " + ec.message());
-  const std::vector<std::string> scenes = {"city", "parking_lot"}, levels = {"none", "low", "mid", "high"};
-  std::vector<std::string> modes = {"baseline", "ransac", "seg", "idy"};
-  if (a.ablations) modes.insert(modes.end(), {"idy-pre", "idy-ba"});
+  return seeds;
+}
 
-  // 1. Datasets (each simulation already uses both cores).
-  std::vector<std::pair<std::string, std::string>> sequences;  // name, dataset folder
-  for (int seed : seeds)
-    for (const auto& scene : scenes)
-      for (const auto& level : levels) {
+const std::vector<std::string> kScenes = {"city", "parking_lot"}, kLevels = {"none", "low", "mid", "high"};
+
+/// The suite's datasets (name, folder), simulated where missing (each simulation uses both cores).
+std::vector<std::pair<std::string, std::string>> simulateMissing(const BenchArgs& a, const std::string& exe,
+                                                                 const fs::path& data, const fs::path& runs) {
+  std::vector<std::pair<std::string, std::string>> sequences;
+  for (int seed : parseSeeds(a.seeds))
+    for (const auto& scene : kScenes)
+      for (const auto& level : kLevels) {
         const std::string name = scene + "_" + level + "_s" + std::to_string(seed);
         const fs::path ds = data / name;
         sequences.emplace_back(name, ds.string());
@@ -110,10 +104,11 @@ int runBench(const BenchArgs& a) {
                                 quote(ds.string()) + " > " + quote((runs / (name + "_simulate.log")).string()) + " 2>&1";
         if (std::system(cmd.c_str()) != 0) throw InputError(ds.string(), "simulation failed (see its log in runs/)");
       }
-  // 2. Runs, in parallel.
-  std::vector<Job> jobs;
-  for (const auto& [name, ds] : sequences)
-    for (const auto& mode : modes) jobs.push_back({name, mode, ds, (runs / (name + "_" + mode)).string()});
+  return sequences;
+}
+
+/// Runs every job (`idyvins run` in a child process), `jobs` at a time, with a progress bar.
+void runJobs(const std::vector<Job>& jobs, const BenchArgs& a, const std::string& exe) {
   std::atomic<std::size_t> next{0}, done{0};
   auto worker = [&] {
     for (std::size_t k = next++; k < jobs.size(); k = next++) {
@@ -139,77 +134,99 @@ int runBench(const BenchArgs& a) {
   for (auto& t : pool) t.join();
   bar.update(done);
   bar.finish();
+}
 
-  // 3. Aggregate.
+/// The runs' summaries, grouped the ways the tables need them.
+struct Collected {
   nlohmann::json results = nlohmann::json::array();
-  std::map<std::string, std::map<std::string, std::vector<double>>> ate;  // scene_level -> mode -> per seed
-  std::map<std::string, std::map<std::string, std::vector<nlohmann::json>>> by_level;  // level -> mode -> summaries
+  std::map<std::string, std::map<std::string, std::vector<double>>> ate;  ///< scene_level -> mode -> per seed
+  std::map<std::string, std::map<std::string, std::vector<nlohmann::json>>> by_level;  ///< level -> mode -> summaries
+};
+
+Collected collect(const std::vector<Job>& jobs) {
+  Collected c;
   for (const Job& j : jobs) {
     const nlohmann::json s = readSummary(j.out);
-    results.push_back({{"sequence", j.sequence}, {"mode", j.mode}, {"dataset", j.dataset}, {"run", j.out}, {"summary", s}});
+    c.results.push_back({{"sequence", j.sequence}, {"mode", j.mode}, {"dataset", j.dataset}, {"run", j.out}, {"summary", s}});
     const std::string key = j.sequence.substr(0, j.sequence.rfind("_s"));
-    ate[key][j.mode].push_back(ateOf(s));
+    c.ate[key][j.mode].push_back(ateOf(s));
     const std::string level = key.substr(key.rfind('_') + 1);
-    if (!s.is_null()) by_level[level][j.mode].push_back(s);
+    if (!s.is_null()) c.by_level[level][j.mode].push_back(s);
   }
-  std::ofstream(out / "results.json") << results.dump(1) << "\n";
-  auto mean = [](const std::vector<double>& v) {
-    double sum = 0;
-    for (double x : v) {
-      if (std::isnan(x)) return static_cast<double>(NAN);
-      sum += x;
-    }
-    return v.empty() ? static_cast<double>(NAN) : sum / v.size();
+  return c;
+}
+
+double meanOrNan(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) {
+    if (std::isnan(x)) return NAN;
+    sum += x;
+  }
+  return v.empty() ? static_cast<double>(NAN) : sum / v.size();
+}
+
+void tableHeader(std::ostringstream& t, const std::vector<std::string>& columns) {
+  t << "| mode |";
+  for (const auto& c : columns) t << " " << c << " |";
+  t << "\n| --- |";
+  for (std::size_t i = 0; i < columns.size(); ++i) t << " --- |";
+  t << "\n";
+}
+
+/// Table 1: ATE RMSE (m), mean over seeds, best per column in bold, failures x; then ratios
+/// to the baseline (seg, ground-truth masks, is what a perfect detector would give).
+std::string table1(const Collected& c, const std::vector<std::string>& modes, const std::string& seeds) {
+  auto ate = [&](const std::string& col, const std::string& mode) {
+    const auto it = c.ate.find(col);
+    if (it == c.ate.end() || !it->second.count(mode)) return static_cast<double>(NAN);
+    return meanOrNan(it->second.at(mode));
   };
-  // Table 1: ATE RMSE (m), mean over seeds, best per column in bold, failures x.
-  std::ostringstream t1;
-  t1 << "ATE RMSE (m, SE3 alignment), mean over seeds " << a.seeds << "; x = failure (no estimate, or ATE > 10 % of path).\n\n| mode |";
   std::vector<std::string> columns;
-  for (const auto& scene : scenes)
-    for (const auto& level : levels) columns.push_back(scene + "_" + level);
-  for (const auto& c : columns) t1 << " " << c << " |";
-  t1 << "\n| --- |";
-  for (std::size_t i = 0; i < columns.size(); ++i) t1 << " --- |";
-  t1 << "\n";
+  for (const auto& scene : kScenes)
+    for (const auto& level : kLevels) columns.push_back(scene + "_" + level);
+  std::ostringstream t1;
+  t1 << "ATE RMSE (m, SE3 alignment), mean over seeds " << seeds
+     << "; x = failure (no estimate, or ATE > 10 % of path).\n\n";
+  tableHeader(t1, columns);
   for (const auto& mode : modes) {
     t1 << "| " << mode << " |";
-    for (const auto& c : columns) {
-      const double v = mean(ate[c][mode]);
+    for (const auto& col : columns) {
+      const double v = ate(col, mode);
       double best = INFINITY;
       for (const auto& m : modes)
-        if (!std::isnan(mean(ate[c][m]))) best = std::min(best, mean(ate[c][m]));
+        if (!std::isnan(ate(col, m))) best = std::min(best, ate(col, m));
       t1 << " " << (!std::isnan(v) && v == best ? "**" + fmt(v) + "**" : fmt(v)) << " |";
     }
     t1 << "\n";
   }
-  // Ratios to the baseline (of the means over seeds), the accuracy targets;
-  // seg (ground-truth masks) is what a perfect detector would give.
-  t1 << "\nATE relative to baseline (ratio of the means over seeds; < 1 is better than the baseline).\n\n| mode |";
-  for (const auto& c : columns) t1 << " " << c << " |";
-  t1 << "\n| --- |";
-  for (std::size_t i = 0; i < columns.size(); ++i) t1 << " --- |";
-  t1 << "\n";
+  t1 << "\nATE relative to baseline (ratio of the means over seeds; < 1 is better than the baseline).\n\n";
+  tableHeader(t1, columns);
   for (const auto& mode : modes) {
     if (mode == "baseline") continue;
     t1 << "| " << mode << " / baseline |";
-    for (const auto& c : columns) {
-      const double q = mean(ate[c][mode]) / mean(ate[c]["baseline"]);
+    for (const auto& col : columns) {
+      const double q = ate(col, mode) / ate(col, "baseline");
       t1 << " " << (std::isnan(q) ? std::string("x") : fmt(q, 2) + "x") << " |";
     }
     t1 << "\n";
   }
-  std::ofstream(out / "table1.md") << t1.str();
-  // Table 2: timing per level.
+  return t1.str();
+}
+
+/// Table 2: timing per level, mean over both scenes and all seeds.
+std::string table2(const Collected& c, const std::vector<std::string>& modes) {
   std::ostringstream t2;
   t2 << "Mean per frame over both scenes and all seeds: tracking ms + dynamic preprocessing ms (the mode's filter), "
         "and optimization ms.\n\n| mode | tracking+filter none | low | mid | high | optimization none | low | mid | high |\n"
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+  static const std::vector<nlohmann::json> kNone;
   for (const auto& mode : modes) {
     t2 << "| " << mode << " |";
     for (int part = 0; part < 2; ++part)
-      for (const auto& level : levels) {
+      for (const auto& level : kLevels) {
         double tr = 0, fi = 0, op = 0;
-        const auto& v = by_level[level][mode];
+        const auto lv = c.by_level.find(level);
+        const auto& v = lv != c.by_level.end() && lv->second.count(mode) ? lv->second.at(mode) : kNone;
         for (const auto& s : v) {
           tr += s["mean_tracking_ms"].get<double>();
           fi += s["mean_filter_ms"].get<double>();
@@ -220,8 +237,11 @@ int runBench(const BenchArgs& a) {
       }
     t2 << "\n";
   }
-  std::ofstream(out / "table2.md") << t2.str();
-  // Dynamic table: classification and map cleanliness per sequence and mode.
+  return t2.str();
+}
+
+/// Classification and map cleanliness per sequence and mode.
+std::string dynamicTable(const nlohmann::json& results) {
   std::ostringstream td;
   td << "Against the simulator's masks, per tracked observation; an observation counts as flagged when its track "
         "was eliminated or confirmed dynamic. Moving flagged: share of observations on moving objects flagged (all; in "
@@ -241,16 +261,44 @@ int runBench(const BenchArgs& a) {
        << fmt(100 * c.value("static_map_fraction_ever_on_moving", 0.0), 2) << " %) | " << s["map_static_points"]
        << " |\n";
   }
-  std::ofstream(out / "dynamic.md") << td.str();
-  // Plots (Debian's python3-matplotlib), optional.
+  return td.str();
+}
+
+/// Plots (Debian's python3-matplotlib), optional.
+void plots(const fs::path& out) {
   const std::string script = std::string(IDYVINS_SOURCE_DIR) + "/scripts/bench_plots.py";
-  if (fs::exists(script) && fs::exists("/usr/bin/python3")) {
-    const std::string cmd = "/usr/bin/python3 " + quote(script) + " " + quote(out.string()) + " > " +
-                            quote((out / "plots.log").string()) + " 2>&1";
-    if (std::system(cmd.c_str()) != 0) std::printf("plots failed, see %s\n", (out / "plots.log").c_str());
-  }
-  std::printf("%s\n%s\nwrote %s/{table1.md,table2.md,dynamic.md,results.json,plots/}\n", t1.str().c_str(),
-              t2.str().c_str(), out.c_str());
+  if (!fs::exists(script) || !fs::exists("/usr/bin/python3")) return;
+  const std::string cmd = "/usr/bin/python3 " + quote(script) + " " + quote(out.string()) + " > " +
+                          quote((out / "plots.log").string()) + " 2>&1";
+  if (std::system(cmd.c_str()) != 0) std::printf("plots failed, see %s\n", (out / "plots.log").c_str());
+}
+
+int runBench(const BenchArgs& a) {
+  if (a.suite != "standard") throw CLI::ValidationError("--suite", "only 'standard' exists");
+  parseSeeds(a.seeds);  // usage errors before any work
+  const std::string exe = self();
+  const fs::path out(a.out), data = a.data.empty() ? out / "data" : fs::path(a.data), runs = out / "runs";
+  std::error_code ec;
+  fs::create_directories(runs, ec);
+  fs::create_directories(data, ec);
+  if (ec) throw InputError(a.out, "cannot create folder: " + ec.message());
+  std::vector<std::string> modes = {"baseline", "ransac", "seg", "idy"};
+  if (a.ablations) modes.insert(modes.end(), {"idy-pre", "idy-ba"});
+
+  std::vector<Job> jobs;
+  for (const auto& [name, ds] : simulateMissing(a, exe, data, runs))
+    for (const auto& mode : modes) jobs.push_back({name, mode, ds, (runs / (name + "_" + mode)).string()});
+  runJobs(jobs, a, exe);
+
+  const Collected c = collect(jobs);
+  std::ofstream(out / "results.json") << c.results.dump(1) << "\n";
+  const std::string t1 = table1(c, modes, a.seeds), t2 = table2(c, modes);
+  std::ofstream(out / "table1.md") << t1;
+  std::ofstream(out / "table2.md") << t2;
+  std::ofstream(out / "dynamic.md") << dynamicTable(c.results);
+  plots(out);
+  std::printf("%s\n%s\nwrote %s/{table1.md,table2.md,dynamic.md,results.json,plots/}\n", t1.c_str(), t2.c_str(),
+              out.c_str());
   return kOk;
 }
 

@@ -285,8 +285,44 @@ bool Estimator::alignAndStart() {
 void Estimator::optimize(FrameResult& r) {
   const auto start = std::chrono::steady_clock::now();
   ceres::Problem problem(borrowingProblemOptions());
-  std::vector<std::shared_ptr<ceres::CostFunction>> costs;
+  std::vector<std::shared_ptr<ceres::CostFunction>> costs;  // owned here, borrowed by the problem
   ceres::HuberLoss huber(options_.huber_px);
+  addStateAndImu(problem, costs);
+  // Candidate weights 1/m_j (DESIGN §4.5): one value per (landmark, frame), owned here,
+  // pointed to by the factors and refreshed by the iteration callback below.
+  std::deque<CandidateWeight> weights;
+  r.landmarks = addProjections(problem, costs, huber, weights, r.candidates);
+  refreshWeights(weights);
+  struct Refresh : ceres::IterationCallback {
+    std::function<void()> f;
+    ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+      f();
+      return ceres::SOLVER_CONTINUE;
+    }
+  } callback;
+  callback.f = [&] { refreshWeights(weights); };
+  ceres::Solver::Options o;
+  if (!weights.empty()) {
+    o.callbacks.push_back(&callback);
+    o.update_state_every_iteration = true;  // the callback reads the current poses
+  }
+  o.linear_solver_type = ceres::DENSE_SCHUR;
+  o.trust_region_strategy_type = ceres::DOGLEG;
+  o.max_num_iterations = config_.solver.max_num_iterations;
+  o.max_solver_time_in_seconds = config_.solver.max_solver_time_s;
+  o.num_threads = 1;  // deterministic
+  const Isometry3d T_w_b0_before = frames_[0].T_w_b();
+  ceres::Solver::Summary summary;
+  ceres::Solve(o, &problem, &summary);
+  if (options_.fix_gauge) restoreGauge(T_w_b0_before);
+  for (int i = 1; i <= count_; ++i) {
+    const imu::NavState s = frames_[i - 1].nav();
+    if (frames_[i].pre->needsRepropagation(s.ba, s.bg)) frames_[i].pre->repropagate(s.ba, s.bg);
+  }
+  r.optimization_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+void Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
   for (int i = 0; i <= count_; ++i) {
     problem.AddParameterBlock(frames_[i].pose.data(), 7, const_cast<PoseManifold*>(&kPoseManifold));
     problem.AddParameterBlock(frames_[i].sb.data(), 9);
@@ -301,31 +337,18 @@ void Estimator::optimize(FrameResult& r) {
     problem.AddResidualBlock(costs.back().get(), nullptr, frames_[i - 1].pose.data(), frames_[i - 1].sb.data(),
                              frames_[i].pose.data(), frames_[i].sb.data());
   }
+}
+
+int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
+                              ceres::LossFunction& huber, std::deque<CandidateWeight>& weights,
+                              int& candidates) {
   const ProjectionWeight w{rig_.focal_px, options_.sigma_px, nullptr};
   int used = 0;
-  // Candidate weights 1/m_j (DESIGN §4.5): one value per (landmark, frame), owned here,
-  // pointed to by the factors and refreshed by the iteration callback below.
-  struct Weight {
-    Landmark* lm;
-    int frame;
-    double info;
-  };
-  std::deque<Weight> weights;
-  const auto refresh = [&] {
-    for (auto& wt : weights) {
-      const Isometry3d T_ci = cameraPose(frames_[wt.lm->start_frame].T_w_b(), rig_.T_b_c0);
-      const Isometry3d T_cj = cameraPose(frames_[wt.frame].T_w_b(), rig_.T_b_c0);
-      const Isometry3d T_ci_cj = T_ci.inverse() * T_cj;
-      const double m = dynamic::epipolarErrorPx2(wt.lm->obs.front().xy, wt.lm->obs[wt.frame - wt.lm->start_frame].xy,
-                                                 T_ci_cj.linear(), T_ci_cj.translation(), rig_.fx, rig_.fy);
-      wt.info = dynamic::candidateInformation(m);
-    }
-  };
   for (auto& [id, lm] : fm_.landmarks()) {
     if (!lm.usable()) continue;
     ++used;
     const bool candidate = options_.candidate_weights && lm.label == frontend::FeatureLabel::kCandidate;
-    r.candidates += candidate;
+    candidates += candidate;
     std::map<int, const double*> scale_of_frame;
     if (candidate) {
       for (std::size_t k = 1; k < lm.obs.size(); ++k) {
@@ -342,45 +365,30 @@ void Estimator::optimize(FrameResult& r) {
                                  frames_[lf.frame].pose.data(), &lm.inv_depth);
     }
   }
-  refresh();
-  struct Refresh : ceres::IterationCallback {
-    std::function<void()> f;
-    ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
-      f();
-      return ceres::SOLVER_CONTINUE;
-    }
-  } callback;
-  callback.f = refresh;
-  ceres::Solver::Options o;
-  if (!weights.empty()) {
-    o.callbacks.push_back(&callback);
-    o.update_state_every_iteration = true;  // the callback reads the current poses
+  return used;
+}
+
+void Estimator::refreshWeights(std::deque<CandidateWeight>& weights) const {
+  for (auto& wt : weights) {
+    const Isometry3d T_ci = cameraPose(frames_[wt.lm->start_frame].T_w_b(), rig_.T_b_c0);
+    const Isometry3d T_cj = cameraPose(frames_[wt.frame].T_w_b(), rig_.T_b_c0);
+    const Isometry3d T_ci_cj = T_ci.inverse() * T_cj;
+    const double m = dynamic::epipolarErrorPx2(wt.lm->obs.front().xy, wt.lm->obs[wt.frame - wt.lm->start_frame].xy,
+                                               T_ci_cj.linear(), T_ci_cj.translation(), rig_.fx, rig_.fy);
+    wt.info = dynamic::candidateInformation(m);
   }
-  o.linear_solver_type = ceres::DENSE_SCHUR;
-  o.trust_region_strategy_type = ceres::DOGLEG;
-  o.max_num_iterations = config_.solver.max_num_iterations;
-  o.max_solver_time_in_seconds = config_.solver.max_solver_time_s;
-  o.num_threads = 1;  // deterministic
-  const Isometry3d T_w_b0_before = frames_[0].T_w_b();
-  ceres::Solver::Summary summary;
-  ceres::Solve(o, &problem, &summary);
-  if (options_.fix_gauge) {
-    const Isometry3d G = gaugeCorrection(T_w_b0_before, frames_[0].T_w_b());
-    const Quaterniond q_G(G.linear());
-    for (int i = 0; i <= count_; ++i) {
-      imu::NavState s = frames_[i].nav();
-      s.p_w_b = G * s.p_w_b;
-      s.q_w_b = (q_G * s.q_w_b).normalized();
-      s.v_w = q_G * s.v_w;
-      frames_[i].setNav(s);
-    }
+}
+
+void Estimator::restoreGauge(const Isometry3d& T_w_b0_before) {
+  const Isometry3d G = gaugeCorrection(T_w_b0_before, frames_[0].T_w_b());
+  const Quaterniond q_G(G.linear());
+  for (int i = 0; i <= count_; ++i) {
+    imu::NavState s = frames_[i].nav();
+    s.p_w_b = G * s.p_w_b;
+    s.q_w_b = (q_G * s.q_w_b).normalized();
+    s.v_w = q_G * s.v_w;
+    frames_[i].setNav(s);
   }
-  for (int i = 1; i <= count_; ++i) {
-    const imu::NavState s = frames_[i - 1].nav();
-    if (frames_[i].pre->needsRepropagation(s.ba, s.bg)) frames_[i].pre->repropagate(s.ba, s.bg);
-  }
-  r.landmarks = used;
-  r.optimization_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 Vector3d Estimator::landmarkWorld(const Landmark& lm) const {

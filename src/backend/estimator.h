@@ -5,6 +5,7 @@
 // oldest keyframe or the second newest frame, failure detection with reset.
 
 #include <array>
+#include <deque>
 #include <memory>
 #include <set>
 #include <vector>
@@ -15,6 +16,10 @@
 #include "frontend/feature_frame.h"
 #include "imu/preintegration.h"
 #include "io/config.h"
+
+namespace ceres {
+class Problem;
+}  // namespace ceres
 
 namespace idyvins::backend {
 
@@ -104,7 +109,22 @@ class Estimator {
   bool initStep(FrameResult& result);
   bool pnp(int frame);
   bool alignAndStart();
+  /// One candidate observation's information scale 1/m_j (DESIGN §4.5).
+  struct CandidateWeight {
+    Landmark* lm;
+    int frame;
+    double info;
+  };
+  /// The window's Ceres solve: state, prior, IMU and projection factors; gauge restored.
   void optimize(FrameResult& result);
+  void addStateAndImu(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
+  /// Projection factors of the usable landmarks (candidates weighted); returns how many.
+  int addProjections(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
+                     ceres::LossFunction& huber, std::deque<CandidateWeight>& weights, int& candidates);
+  /// Recomputes every candidate weight from the current poses.
+  void refreshWeights(std::deque<CandidateWeight>& weights) const;
+  /// Moves the window back so that its oldest frame keeps its yaw and position (backend/gauge.h).
+  void restoreGauge(const Eigen::Isometry3d& T_w_b0_before);
   void removeOutliers(FrameResult& result);
   void postProcess(FrameResult& result);
   /// Mean left-camera reprojection error (px) of a landmark from its anchor into its other

@@ -184,8 +184,15 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
     it.feature->score = ds[k];
   }
   stats_.d_s = ds;
+  const std::vector<bool> removed = eliminateAndMark(items, tracked, raw, ds);
+  if (o_.stereo.enabled) stereoTest(ctx, items, tracked, removed, R, fx);
+}
+
+std::vector<bool> IdyFilter::eliminateAndMark(std::vector<frontend::FilterItem>& items,
+                                              const std::vector<std::size_t>& tracked, const std::vector<double>& raw,
+                                              const std::vector<double>& ds) {
   std::vector<bool> removed(tracked.size(), false);
-  if (o_.eliminate) {
+  if (o_.eliminate) {  // eq. 4-5
     const Elimination e = eliminate(ds, o_.lambda_dy);
     stats_.cv_before = e.cv_before;
     stats_.cv_after = e.cv_after;
@@ -202,35 +209,53 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
   }
   for (std::size_t k = 0; k < tracked.size(); ++k)
     if (!removed[k]) stats_.d_s_kept.push_back(ds[k]);
-  for (std::size_t k = 0; k < tracked.size(); ++k) {
+  for (std::size_t k = 0; k < tracked.size(); ++k) {  // eq. 6
     if (removed[k] || raw[k] <= o_.lambda_dy_c) continue;
     items[tracked[k]].feature->label = frontend::FeatureLabel::kCandidate;
     ++stats_.candidates;
   }
-  if (!o_.stereo.enabled) return;
+  return removed;
+}
+
+bool IdyFilter::nextAnchor(const frontend::FilterItem& it, const frontend::MotionPrior& prior, const Matrix3d& R,
+                           double sigma_p2, StereoAnchor& anchor) const {
+  // The anchor: the stereo observation the current one is compared with, and the camera
+  // motion since, chained from the per-frame priors (P_anchor = R P_cur + t).
+  const auto old = stereo_anchors_.find(it.feature->id);
+  if (old != stereo_anchors_.end() && (old->second.steps < o_.stereo.anchor_frames || !it.prev_has_right)) {
+    anchor = old->second;
+    anchor.t = anchor.R * prior.t_prev_cur + anchor.t;
+    anchor.R = anchor.R * R;
+    anchor.var_p += sigma_p2;
+    ++anchor.steps;
+  } else if (it.prev_has_right) {
+    anchor = {it.prev_xy, it.prev_xy_right, R, prior.t_prev_cur, sigma_p2, 1, 0};
+  } else {
+    return false;
+  }
+  anchor.strikes = 0;  // until this frame's test fails
+  return true;
+}
+
+void IdyFilter::markCandidate(frontend::Feature& f) {
+  if (f.label == frontend::FeatureLabel::kCandidate) return;
+  f.label = frontend::FeatureLabel::kCandidate;
+  ++stats_.candidates;
+}
+
+void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<frontend::FilterItem>& items,
+                           const std::vector<std::size_t>& tracked, const std::vector<bool>& removed,
+                           const Matrix3d& R, double fx) {
   const double sigma_p2 = std::max(0.0, ctx.prior->cov_p.trace()) / 3.0;
   const double dt = std::max(0.0, toSeconds(ctx.t_cur_ns - ctx.t_prev_ns));
   std::unordered_map<std::uint64_t, StereoAnchor> anchors;  // of the features seen now
   for (std::size_t k = 0; k < tracked.size(); ++k) {
     auto& it = items[tracked[k]];
     if (removed[k]) continue;
-    // The anchor: the stereo observation the current one is compared with, and the
-    // camera motion since, chained from the per-frame priors (P_anchor = R P_cur + t).
-    StereoAnchor anchor;
     const auto old = stereo_anchors_.find(it.feature->id);
     const int strikes_before = old != stereo_anchors_.end() ? old->second.strikes : 0;
-    if (old != stereo_anchors_.end() && (old->second.steps < o_.stereo.anchor_frames || !it.prev_has_right)) {
-      anchor = old->second;
-      anchor.t = anchor.R * ctx.prior->t_prev_cur + anchor.t;
-      anchor.R = anchor.R * R;
-      anchor.var_p += sigma_p2;
-      ++anchor.steps;
-    } else if (it.prev_has_right) {
-      anchor = {it.prev_xy, it.prev_xy_right, R, ctx.prior->t_prev_cur, sigma_p2, 1, 0};
-    } else {
-      continue;
-    }
-    anchor.strikes = 0;  // until this frame's test fails
+    StereoAnchor anchor;
+    if (!nextAnchor(it, *ctx.prior, R, sigma_p2, anchor)) continue;
     StereoAnchor& kept = anchors[it.feature->id] = anchor;
     if (!it.feature->has_right) continue;
     ++stats_.stereo_tested;
@@ -245,10 +270,7 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
     if (o_.stereo.left_chi2 > 0 && e.chi2_left <= o_.stereo.left_chi2) continue;  // only the right match disagrees
     kept.strikes = strikes_before + 1;
     if (kept.strikes < o_.stereo.strikes) {  // a first failure only marks (one bad match is not motion)
-      if (it.feature->label != frontend::FeatureLabel::kCandidate) {
-        it.feature->label = frontend::FeatureLabel::kCandidate;
-        ++stats_.candidates;
-      }
+      markCandidate(*it.feature);
       continue;
     }
     ++stats_.stereo_eliminated;
@@ -256,9 +278,8 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
       it.remove = true;
       it.feature->label = frontend::FeatureLabel::kEliminated;
       ++stats_.eliminated;
-    } else if (it.feature->label != frontend::FeatureLabel::kCandidate) {
-      it.feature->label = frontend::FeatureLabel::kCandidate;
-      ++stats_.candidates;
+    } else {
+      markCandidate(*it.feature);
     }
   }
   stereo_anchors_ = std::move(anchors);

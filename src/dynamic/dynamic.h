@@ -128,6 +128,18 @@ class IdyFilter final : public frontend::FeatureFilter {
     int strikes;                 ///< consecutive failures of the test up to now
   };
   std::unordered_map<std::uint64_t, StereoAnchor> stereo_anchors_;  ///< id -> anchor
+  /// CV elimination (eq. 4-5) and marking (eq. 6) of the tracked items; returns which were removed.
+  std::vector<bool> eliminateAndMark(std::vector<frontend::FilterItem>& items, const std::vector<std::size_t>& tracked,
+                                     const std::vector<double>& raw, const std::vector<double>& ds);
+  /// The stereo motion test (DESIGN §4.9) over the tracked items not removed yet.
+  void stereoTest(const frontend::FilterContext& ctx, std::vector<frontend::FilterItem>& items,
+                  const std::vector<std::size_t>& tracked, const std::vector<bool>& removed, const Eigen::Matrix3d& R,
+                  double fx);
+  /// This frame's anchor of an item (chained from its old one, or its previous stereo
+  /// observation); false when it has none.
+  bool nextAnchor(const frontend::FilterItem& it, const frontend::MotionPrior& prior, const Eigen::Matrix3d& R,
+                  double sigma_p2, StereoAnchor& anchor) const;
+  void markCandidate(frontend::Feature& f);
 };
 
 }  // namespace idyvins::dynamic

@@ -313,107 +313,126 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
 FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& prior, FeatureFilter* filter,
                                    const cv::Mat* mask) {
   const auto start = Clock::now();
-  FeatureFrame out;
-  out.t_ns = frame.t_ns;
-  double lost_ms = 0;  // judging lost new corners counts as dynamic preprocessing
-  std::vector<cv::Mat>& pyr = cur_pyr_;
-  cv::buildOpticalFlowPyramid(frame.left, pyr, cv::Size(params_.klt_window, params_.klt_window), params_.klt_levels);
-
-  // Right pyramid first: tracked features are matched in the right image before the
-  // filter (a filter may compare stereo observations of consecutive frames).
-  has_right_image_ = !frame.right.empty() && cams_.size() >= 2;
-  if (has_right_image_)
-    cv::buildOpticalFlowPyramid(frame.right, right_pyr_, cv::Size(params_.klt_window, params_.klt_window),
-                                params_.klt_levels);
-
+  FrameWork w{FeatureFrame{}, filter, FilterContext{cams_[0].get(), &prior, mask, prev_t_ns_, frame.t_ns}, {}, 0.0};
+  w.out.t_ns = frame.t_ns;
+  buildPyramids(frame);
   std::vector<Track> tracks;
   std::vector<PrevObs> prev;
   std::vector<const Track*> lost;  // into prev_tracks_
-  trackPrevious(pyr, frame.left, tracks, prev, lost);
+  trackPrevious(cur_pyr_, frame.left, tracks, prev, lost);
   if (params_.judge_lost_new_tracks && !lost.empty()) {
     const auto t0 = Clock::now();
-    judgeLost(pyr, frame.left, prior, lost, out);
-    lost_ms = msSince(t0);
+    judgeLost(cur_pyr_, frame.left, prior, lost, w.out);
+    w.filter_ms = msSince(t0);  // judging lost new corners counts as dynamic preprocessing
   }
-  out.tracked = tracks.size();
-  // Eliminated tracks still followed skip the filter and the output (reported as removed below).
-  std::vector<Track> followed;
-  if (!followed_.empty()) {
-    std::vector<Track> rest;
-    std::vector<PrevObs> rest_prev;
-    for (std::size_t i = 0; i < tracks.size(); ++i) {
-      if (followed_.count(tracks[i].id)) {
-        followed.push_back(tracks[i]);
-        continue;
-      }
-      rest.push_back(tracks[i]);
-      rest_prev.push_back(prev[i]);
-    }
-    tracks = std::move(rest);
-    prev = std::move(rest_prev);
-  }
+  w.out.tracked = tracks.size();
+  std::vector<Track> followed = separateFollowed(tracks, prev);
   const double dt = prev_pyr_.empty() ? 0.0 : toSeconds(frame.t_ns - prev_t_ns_);
 
   // Rejection filter on tracked features (before the top-up, so holes refill now).
-  double filter_ms = lost_ms;
-  std::vector<Track> removed_tracks;  // tracks behind out.removed, in the same order
-  FilterContext ctx{cams_[0].get(), &prior, mask, prev_t_ns_, frame.t_ns};
-  auto runFilter = [&](std::vector<Track>& list, const std::vector<PrevObs>* prev_obs, std::vector<Feature>& feats) {
-    feats.clear();
-    for (const auto& t : list) feats.push_back(featureOf(t));
-    if (prev_obs) matchRight(pyr, feats);  // tracked: right match now; new corners: after the top-up
-    if (!filter) return;
-    const auto t0 = Clock::now();
-    std::vector<FilterItem> items(feats.size());
-    for (std::size_t i = 0; i < feats.size(); ++i) {
-      items[i].feature = &feats[i];
-      items[i].tracked = prev_obs != nullptr;
-      if (prev_obs) {
-        const PrevObs& p = (*prev_obs)[i];
-        items[i].prev_uv = p.uv;
-        items[i].prev_xy = p.xy;
-        items[i].prev_has_right = p.has_right;
-        items[i].prev_xy_right = p.xy_right;
-      }
-    }
-    filter->apply(ctx, items);
-    std::vector<Track> kept_tracks;
-    std::vector<Feature> kept_feats;
-    for (std::size_t i = 0; i < items.size(); ++i) {
-      if (items[i].remove) {
-        Feature r = feats[i];
-        r.label = FeatureLabel::kEliminated;
-        out.removed.push_back(r);
-        removed_tracks.push_back(list[i]);
-      } else {
-        kept_tracks.push_back(list[i]);
-        kept_feats.push_back(feats[i]);
-      }
-    }
-    list = std::move(kept_tracks);
-    feats = std::move(kept_feats);
-    filter_ms += msSince(t0);
-  };
   std::vector<Feature> tracked_feats;
-  runFilter(tracks, &prev, tracked_feats);
+  filterTracks(w, tracks, &prev, tracked_feats);
   std::unordered_map<std::uint64_t, Feature> carried;  // id -> feature as the filter labelled it
   for (const auto& f : tracked_feats) carried.emplace(f.id, f);
-  out.rejected = out.removed.size();
-  if (params_.keep_following_eliminated) {
-    // Report the ones followed from earlier frames, then follow the newly removed ones too.
-    for (const auto& t : followed) out.removed.push_back(featureOf(t, FeatureLabel::kEliminated));
-    followed.insert(followed.end(), removed_tracks.begin(), removed_tracks.end());
-    followed_.clear();
-    for (const auto& t : followed) followed_.insert(t.id);
-    tracks.insert(tracks.end(), followed.begin(), followed.end());  // they occupy their place in detectNew
-  }
+  w.out.rejected = w.out.removed.size();
+  if (params_.keep_following_eliminated) followEliminated(w, followed, tracks);
 
-  detectNew(frame.left, tracks, out.detected);
+  detectNew(frame.left, tracks, w.out.detected);
+  std::vector<Track> final_tracks = assembleFeatures(w, tracks, carried);
+  setVelocities(w.out, dt);
+  matchNewAndFollowed(w.out, final_tracks);
+
+  std::swap(prev_pyr_, cur_pyr_);  // keep both pyramids' buffers for the next frame
+  prev_tracks_ = std::move(final_tracks);
+  prev_t_ns_ = frame.t_ns;
+  w.out.filter_ms = w.filter_ms;
+  w.out.tracking_ms = msSince(start) - w.filter_ms;
+  return std::move(w.out);
+}
+
+void FeatureTracker::buildPyramids(const StereoFrame& frame) {
+  const cv::Size window(params_.klt_window, params_.klt_window);
+  cv::buildOpticalFlowPyramid(frame.left, cur_pyr_, window, params_.klt_levels);
+  // Right pyramid first: tracked features are matched in the right image before the
+  // filter (a filter may compare stereo observations of consecutive frames).
+  has_right_image_ = !frame.right.empty() && cams_.size() >= 2;
+  if (has_right_image_) cv::buildOpticalFlowPyramid(frame.right, right_pyr_, window, params_.klt_levels);
+}
+
+std::vector<FeatureTracker::Track> FeatureTracker::separateFollowed(std::vector<Track>& tracks,
+                                                                    std::vector<PrevObs>& prev) const {
+  // Eliminated tracks still followed skip the filter and the output (reported as removed).
+  std::vector<Track> followed;
+  if (followed_.empty()) return followed;
+  std::vector<Track> rest;
+  std::vector<PrevObs> rest_prev;
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    if (followed_.count(tracks[i].id)) {
+      followed.push_back(tracks[i]);
+      continue;
+    }
+    rest.push_back(tracks[i]);
+    rest_prev.push_back(prev[i]);
+  }
+  tracks = std::move(rest);
+  prev = std::move(rest_prev);
+  return followed;
+}
+
+void FeatureTracker::filterTracks(FrameWork& w, std::vector<Track>& list, const std::vector<PrevObs>* prev_obs,
+                                  std::vector<Feature>& feats) {
+  feats.clear();
+  for (const auto& t : list) feats.push_back(featureOf(t));
+  if (prev_obs) matchRight(cur_pyr_, feats);  // tracked: right match now; new corners: after the top-up
+  if (!w.filter) return;
+  const auto t0 = Clock::now();
+  std::vector<FilterItem> items(feats.size());
+  for (std::size_t i = 0; i < feats.size(); ++i) {
+    items[i].feature = &feats[i];
+    items[i].tracked = prev_obs != nullptr;
+    if (prev_obs) {
+      const PrevObs& p = (*prev_obs)[i];
+      items[i].prev_uv = p.uv;
+      items[i].prev_xy = p.xy;
+      items[i].prev_has_right = p.has_right;
+      items[i].prev_xy_right = p.xy_right;
+    }
+  }
+  w.filter->apply(w.ctx, items);
+  std::vector<Track> kept_tracks;
+  std::vector<Feature> kept_feats;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (items[i].remove) {
+      Feature r = feats[i];
+      r.label = FeatureLabel::kEliminated;
+      w.out.removed.push_back(r);
+      w.removed_tracks.push_back(list[i]);
+    } else {
+      kept_tracks.push_back(list[i]);
+      kept_feats.push_back(feats[i]);
+    }
+  }
+  list = std::move(kept_tracks);
+  feats = std::move(kept_feats);
+  w.filter_ms += msSince(t0);
+}
+
+void FeatureTracker::followEliminated(FrameWork& w, std::vector<Track>& followed, std::vector<Track>& tracks) {
+  // Report the ones followed from earlier frames, then follow the newly removed ones too.
+  for (const auto& t : followed) w.out.removed.push_back(featureOf(t, FeatureLabel::kEliminated));
+  followed.insert(followed.end(), w.removed_tracks.begin(), w.removed_tracks.end());
+  followed_.clear();
+  for (const auto& t : followed) followed_.insert(t.id);
+  tracks.insert(tracks.end(), followed.begin(), followed.end());  // they occupy their place in detectNew
+}
+
+std::vector<FeatureTracker::Track> FeatureTracker::assembleFeatures(
+    FrameWork& w, const std::vector<Track>& tracks, const std::unordered_map<std::uint64_t, Feature>& carried) {
   std::vector<Track> fresh;
   for (const auto& t : tracks)
     if (t.length == 1) fresh.push_back(t);
   std::vector<Feature> fresh_feats;
-  runFilter(fresh, nullptr, fresh_feats);  // seg may remove new corners on moving objects
+  filterTracks(w, fresh, nullptr, fresh_feats);  // seg may remove new corners on moving objects
   std::unordered_map<std::uint64_t, bool> fresh_kept;
   for (const auto& f : fresh_feats) fresh_kept[f.id] = true;
 
@@ -421,31 +440,36 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
   for (const auto& t : tracks) {
     if (t.length == 1) {
       if (!fresh_kept.count(t.id)) continue;
-      out.features.push_back(featureOf(t));
+      w.out.features.push_back(featureOf(t));
     } else if (!followed_.count(t.id)) {  // followed tracks are kept, not output
       auto it = carried.find(t.id);
       if (it == carried.end()) continue;
-      out.features.push_back(it->second);
+      w.out.features.push_back(it->second);
     }
     final_tracks.push_back(t);
   }
-  // Pixel velocity from the previous observation.
-  if (dt > 0) {
-    std::unordered_map<std::uint64_t, cv::Point2f> prev_pos;
-    for (const auto& t : prev_tracks_) prev_pos[t.id] = t.uv;
-    for (auto& f : out.features) {
-      auto it = prev_pos.find(f.id);
-      if (it != prev_pos.end()) f.velocity_px = (f.uv - toEigen(it->second)) / dt;
-    }
+  return final_tracks;
+}
+
+void FeatureTracker::setVelocities(FeatureFrame& out, double dt) const {
+  if (dt <= 0) return;  // pixel velocity from the previous observation
+  std::unordered_map<std::uint64_t, cv::Point2f> prev_pos;
+  for (const auto& t : prev_tracks_) prev_pos[t.id] = t.uv;
+  for (auto& f : out.features) {
+    auto it = prev_pos.find(f.id);
+    if (it != prev_pos.end()) f.velocity_px = (f.uv - toEigen(it->second)) / dt;
   }
+}
+
+void FeatureTracker::matchNewAndFollowed(FeatureFrame& out, std::vector<Track>& final_tracks) {
   // New corners, and eliminated tracks followed from earlier frames (removed features may
   // go to the dynamic map); tracked features were matched before the filter.
   std::vector<std::size_t> new_idx, followed_idx;
   for (std::size_t i = 0; i < out.features.size(); ++i)
     if (out.features[i].track_length == 1) new_idx.push_back(i);
   for (std::size_t i = out.rejected; i < out.removed.size(); ++i) followed_idx.push_back(i);
-  matchRight(pyr, out.features, &new_idx);
-  matchRight(pyr, out.removed, &followed_idx);
+  matchRight(cur_pyr_, out.features, &new_idx);
+  matchRight(cur_pyr_, out.removed, &followed_idx);
   std::unordered_map<std::uint64_t, const Feature*> by_id;  // this frame's observation of each kept track
   for (const auto& f : out.features) by_id.emplace(f.id, &f);
   for (const auto& f : out.removed) by_id.emplace(f.id, &f);
@@ -454,13 +478,6 @@ FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& 
     t.has_right = it != by_id.end() && it->second->has_right;
     t.xy_right = t.has_right ? it->second->xy_right : Eigen::Vector2d::Zero();
   }
-
-  std::swap(prev_pyr_, cur_pyr_);  // keep both pyramids' buffers for the next frame
-  prev_tracks_ = std::move(final_tracks);
-  prev_t_ns_ = frame.t_ns;
-  out.filter_ms = filter_ms;
-  out.tracking_ms = msSince(start) - filter_ms;
-  return out;
 }
 
 cv::Mat drawTracks(const cv::Mat& left, const FeatureFrame& frame) {

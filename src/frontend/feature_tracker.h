@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <opencv2/core/mat.hpp>
+#include <unordered_map>
 #include <unordered_set>
 #include <vector>
 
@@ -94,7 +95,30 @@ class FeatureTracker {
     bool has_right;
     Eigen::Vector2d xy_right;
   };
+  /// What one call of track() builds up while it runs.
+  struct FrameWork {
+    FeatureFrame out;
+    FeatureFilter* filter;
+    FilterContext ctx;
+    std::vector<Track> removed_tracks;  ///< tracks behind out.removed (this frame's removals), same order
+    double filter_ms;                   ///< filter and lost-corner time so far
+  };
   static Feature featureOf(const Track& t, FeatureLabel label = FeatureLabel::kStatic);
+  void buildPyramids(const StereoFrame& frame);
+  /// Takes the eliminated tracks still followed out of `tracks` (and `prev`) and returns them.
+  std::vector<Track> separateFollowed(std::vector<Track>& tracks, std::vector<PrevObs>& prev) const;
+  /// Features of `list` through the filter; removed ones go to w.out.removed. With
+  /// `prev_obs` (tracked features) they are matched in the right image first.
+  void filterTracks(FrameWork& w, std::vector<Track>& list, const std::vector<PrevObs>* prev_obs,
+                    std::vector<Feature>& feats);
+  /// keep_following_eliminated: reports the followed tracks and follows this frame's removals.
+  void followEliminated(FrameWork& w, std::vector<Track>& followed, std::vector<Track>& tracks);
+  /// Filters the new corners, fills w.out.features, returns the tracks kept for the next frame.
+  std::vector<Track> assembleFeatures(FrameWork& w, const std::vector<Track>& tracks,
+                                      const std::unordered_map<std::uint64_t, Feature>& carried);
+  void setVelocities(FeatureFrame& out, double dt) const;
+  /// Right matches of new corners and followed tracks; records each kept track's match.
+  void matchNewAndFollowed(FeatureFrame& out, std::vector<Track>& final_tracks);
   void trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Mat& image, std::vector<Track>& tracks,
                      std::vector<PrevObs>& prev, std::vector<const Track*>& lost);
   /// Where the prior puts a track's previous-frame stereo point as static (uv_pred) and how
