@@ -148,27 +148,34 @@ bool FeatureTracker::predictStatic(const Track& t, const MotionPrior& prior, Eig
 
 void FeatureTracker::judgeLost(const std::vector<cv::Mat>& pyr, const cv::Mat& image, const MotionPrior& prior,
                                const std::vector<const Track*>& lost, FeatureFrame& out) const {
-  std::vector<const Track*> judged;
-  std::vector<Eigen::Vector2d> pred;
-  std::vector<Eigen::Vector3d> pred_p;
-  std::vector<double> tol;
+  std::vector<LostJudged> judged;
   for (const Track* t : lost) {
-    Eigen::Vector2d uv;
-    Eigen::Vector3d p;
-    double tol_px;
-    if (t->length != 1 || !predictStatic(*t, prior, p, uv, tol_px)) continue;  // longer tracks were scored
-    judged.push_back(t);
-    pred.push_back(uv);
-    pred_p.push_back(p);
-    tol.push_back(tol_px);
+    LostJudged j{t, {}, {}, 0};
+    if (t->length != 1 || !predictStatic(*t, prior, j.p_pred, j.uv_pred, j.tol_px)) continue;  // longer tracks were scored
+    judged.push_back(j);
   }
   out.lost_tested = judged.size();
   if (judged.empty()) return;
+  const std::vector<std::size_t> not_found = notFoundNearPrediction(pyr, image, judged);
+  if (not_found.empty()) return;
+  const std::vector<uchar> hidden = hiddenAtPrediction(pyr, judged, not_found);
+  for (std::size_t j = 0; j < not_found.size(); ++j) {
+    if (hidden[j]) continue;
+    const Track& t = *judged[not_found[j]].track;
+    Feature f = featureOf(t, FeatureLabel::kEliminated);
+    f.has_right = true;
+    f.xy_right = t.xy_right;
+    out.lost_moving.push_back(f);
+  }
+}
+
+std::vector<std::size_t> FeatureTracker::notFoundNearPrediction(const std::vector<cv::Mat>& pyr, const cv::Mat& image,
+                                                                const std::vector<LostJudged>& judged) const {
   // KLT started at the static prediction (a wider basin than the patch alignment alone).
   std::vector<cv::Point2f> p0, p1;
-  for (std::size_t i = 0; i < judged.size(); ++i) {
-    p0.push_back(judged[i]->uv);
-    p1.emplace_back(static_cast<float>(pred[i].x()), static_cast<float>(pred[i].y()));
+  for (const auto& j : judged) {
+    p0.push_back(j.track->uv);
+    p1.emplace_back(static_cast<float>(j.uv_pred.x()), static_cast<float>(j.uv_pred.y()));
   }
   std::vector<uchar> status;
   std::vector<float> err;
@@ -178,55 +185,57 @@ void FeatureTracker::judgeLost(const std::vector<cv::Mat>& pyr, const cv::Mat& i
                            cv::OPTFLOW_USE_INITIAL_FLOW);
   std::vector<std::size_t> not_found;
   for (std::size_t i = 0; i < judged.size(); ++i) {
-    const Track& t = *judged[i];
+    const Track& t = *judged[i].track;
+    const Eigen::Vector2d& pred = judged[i].uv_pred;
     double best_zncc = -1;  // best match of the first patch near the prediction
     auto foundFrom = [&](const Eigen::Vector2d& start) {
       AffineWarp warp{t.A_patch, start};
       const AlignResult r = alignAffine(*t.patch, image, warp);
-      if ((warp.t - pred[i]).norm() > tol[i]) return false;
+      if ((warp.t - pred).norm() > judged[i].tol_px) return false;
       best_zncc = std::max(best_zncc, r.zncc);
       return r.converged && r.zncc >= params_.min_patch_zncc;
     };
-    if (foundFrom(pred[i])) continue;
-    if (status[i] && (toEigen(p1[i]) - pred[i]).norm() <= tol[i] && foundFrom(toEigen(p1[i]))) continue;
+    if (foundFrom(pred)) continue;
+    if (status[i] && (toEigen(p1[i]) - pred).norm() <= judged[i].tol_px && foundFrom(toEigen(p1[i]))) continue;
     // A corner on a silhouette (half background) still half matches there: only a clear
     // mismatch counts as moved.
     if (best_zncc >= params_.lost_max_zncc) continue;
     not_found.push_back(i);
   }
+  return not_found;
+}
+
+std::vector<uchar> FeatureTracker::hiddenAtPrediction(const std::vector<cv::Mat>& pyr,
+                                                      const std::vector<LostJudged>& judged,
+                                                      const std::vector<std::size_t>& not_found) const {
   // Occlusion: something nearer than the static point now stands where it should be (a
   // vehicle passing in front of the background). Stereo-match the predicted pixel; when
   // the surface there is clearly nearer, the corner is hidden, not moved: not judged.
-  if (not_found.empty()) return;
   std::vector<uchar> hidden(not_found.size(), 0);
-  if (has_right_image_) {
-    std::vector<cv::Point2f> pl, pr;
-    for (std::size_t i : not_found) {
-      pl.emplace_back(static_cast<float>(pred[i].x()), static_cast<float>(pred[i].y()));
-      Eigen::Vector2d uv_r = pred[i];
-      cams_[1]->project(T_c1_c0_ * pred_p[i], uv_r);
-      pr.emplace_back(static_cast<float>(uv_r.x()), static_cast<float>(uv_r.y()));
-    }
-    std::vector<uchar> st;
-    cv::calcOpticalFlowPyrLK(pyr, right_pyr_, pl, pr, st, err, win, params_.klt_levels, crit,
-                             cv::OPTFLOW_USE_INITIAL_FLOW);
-    for (std::size_t j = 0; j < not_found.size(); ++j) {
-      const std::size_t i = not_found[j];
-      Eigen::Vector2d xy_l, xy_r;
-      double depth;
-      hidden[j] = st[j] && cams_[0]->liftToNormalized(pred[i], xy_l) &&
-                  cams_[1]->liftToNormalized(toEigen(pr[j]), xy_r) && stereoDepth(xy_l, xy_r, T_c1_c0_, depth) &&
-                  depth > 0 && depth < params_.lost_occlusion_ratio * pred_p[i].z();
-    }
+  if (!has_right_image_) return hidden;
+  std::vector<cv::Point2f> pl, pr;
+  for (std::size_t i : not_found) {
+    const Eigen::Vector2d& pred = judged[i].uv_pred;
+    pl.emplace_back(static_cast<float>(pred.x()), static_cast<float>(pred.y()));
+    Eigen::Vector2d uv_r = pred;
+    cams_[1]->project(T_c1_c0_ * judged[i].p_pred, uv_r);
+    pr.emplace_back(static_cast<float>(uv_r.x()), static_cast<float>(uv_r.y()));
   }
+  std::vector<uchar> st;
+  std::vector<float> err;
+  const cv::Size win(params_.klt_window, params_.klt_window);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations, params_.klt_epsilon);
+  cv::calcOpticalFlowPyrLK(pyr, right_pyr_, pl, pr, st, err, win, params_.klt_levels, crit,
+                           cv::OPTFLOW_USE_INITIAL_FLOW);
   for (std::size_t j = 0; j < not_found.size(); ++j) {
-    if (hidden[j]) continue;
-    const Track& t = *judged[not_found[j]];
-    Feature f = featureOf(t, FeatureLabel::kEliminated);
-    f.has_right = true;
-    f.xy_right = t.xy_right;
-    out.lost_moving.push_back(f);
+    const LostJudged& c = judged[not_found[j]];
+    Eigen::Vector2d xy_l, xy_r;
+    double depth;
+    hidden[j] = st[j] && cams_[0]->liftToNormalized(c.uv_pred, xy_l) &&
+                cams_[1]->liftToNormalized(toEigen(pr[j]), xy_r) && stereoDepth(xy_l, xy_r, T_c1_c0_, depth) &&
+                depth > 0 && depth < params_.lost_occlusion_ratio * c.p_pred.z();
   }
+  return hidden;
 }
 
 void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected) {

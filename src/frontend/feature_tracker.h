@@ -129,6 +129,19 @@ class FeatureTracker {
   /// found (KLT from the prediction, then the first patch) near their static prediction.
   void judgeLost(const std::vector<cv::Mat>& pyr, const cv::Mat& image, const MotionPrior& prior,
                  const std::vector<const Track*>& lost, FeatureFrame& out) const;
+  /// A lost new corner the static hypothesis can be tested on, with its prediction.
+  struct LostJudged {
+    const Track* track;
+    Eigen::Vector3d p_pred;   ///< the static point in the current left camera
+    Eigen::Vector2d uv_pred;  ///< its pixel
+    double tol_px;
+  };
+  /// Indices of the judged corners neither KLT nor the first patch finds near the prediction.
+  std::vector<std::size_t> notFoundNearPrediction(const std::vector<cv::Mat>& pyr, const cv::Mat& image,
+                                                  const std::vector<LostJudged>& judged) const;
+  /// Per not-found corner: 1 when a clearly nearer surface stands at its predicted pixel.
+  std::vector<uchar> hiddenAtPrediction(const std::vector<cv::Mat>& pyr, const std::vector<LostJudged>& judged,
+                                        const std::vector<std::size_t>& not_found) const;
   void detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected);
   /// Matches features[i] for i in `which` (all when null) in the right image.
   void matchRight(const std::vector<cv::Mat>& left_pyr, std::vector<Feature>& features,
