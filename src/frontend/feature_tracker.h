@@ -22,7 +22,7 @@ namespace idyvins::frontend {
 /// Tracker options beyond the config's tracker block.
 struct TrackerParams {
   int klt_window = 13;  ///< px; smaller than VINS-Fusion's 21: less drift under perspective change (measured)
-  int klt_levels = 4;  ///< 13 px window: capture range about VINS-Fusion's 21 px x 3 levels (session 7)
+  int klt_levels = 4;  ///< 13 px window: capture range about VINS-Fusion's 21 px x 3 levels (2d6b296)
   /// Pyramid levels of the backward checks: they start at the forward start point, so a
   /// narrow basin suffices (VINS-Fusion uses 1 for its reverse check).
   int klt_back_levels = 1;
@@ -41,7 +41,7 @@ struct TrackerParams {
   /// keep their place in the image so that no new corner is seeded on the same moving
   /// object (a fresh corner there would enter the estimator unscored for a frame).
   bool keep_following_eliminated = false;
-  /// Judge the new corners lost in their second frame (IDY modes; session-7 extension of
+  /// Judge the new corners lost in their second frame (IDY modes; extension of
   /// DESIGN §4.3): a corner with a right match is moved as a static point by the motion
   /// prior and its first patch aligned there; when it is not found where a static point
   /// would be, it is reported in FeatureFrame::lost_moving. Such a corner never reaches

@@ -50,7 +50,7 @@ struct StereoMotionOptions {
   double drift_mps = 0.02;     ///< `stereo_motion_drift_mps`: drift of the chained priors
   /// `stereo_motion_left_chi2`: a failure whose left-image residual alone is within this
   /// (χ², 2 dof; 5.99 = 95 %) is not counted (the right match is suspect: hidden, or at a
-  /// silhouette). 0 = off. 5.99 measured in sessions 10–11 (13.82 cost recall), see the README.
+  /// silhouette). 0 = off. 5.99 measured at 9ffe0a1 (13.82 cost recall), see docs/method.md.
   double left_chi2 = 5.99;
 };
 
@@ -58,13 +58,13 @@ struct DynamicOptions {
   Mode mode = Mode::kIdy;
   double lambda_dy = 4.0;    ///< px^2, elimination threshold (eq. 4)
   double lambda_dy_c = 1.0;  ///< px^2, candidate threshold (eq. 6)
-  /// Session-5 extension of §4.6 (not in the paper): in the modes with post-processing, a
+  /// Extension of §4.6 (not in the paper): in the modes with post-processing, a
   /// landmark that fails the 3 px outlier test is confirmed dynamic like a failing candidate
   /// (its track leaves the window for good, dynamic map) instead of being dropped and
   /// re-triangulated from its next observation. Config key `confirm_outliers_dynamic`.
   bool confirm_outliers = true;
   StereoMotionOptions stereo;
-  /// Session-7 extension of §4.3 (not in the paper): in idy and idy-pre, a new corner lost
+  /// Extension of §4.3 (not in the paper): in idy and idy-pre, a new corner lost
   /// in its second frame is labelled dynamic when it is not found where the motion prior
   /// puts it as a static stereo point (frontend::TrackerParams::judge_lost_new_tracks).
   /// Labels and dynamic map only: such a corner never constrains the estimate.
