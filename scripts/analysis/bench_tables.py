@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Tables of a finished `idyvins bench` run (OUT/results.json) for the README.
+"""Tables of a finished `idyvins bench` run (OUT/results.json) for the README and docs/results.md.
 
 Prints, as Markdown: ATE per seed, the classification means over seeds per scene,
 level and mode, idy's static flagged per seed, the lost-corner test totals, and the

@@ -38,7 +38,7 @@ struct SolverOptions {
 
 /// Parameters of the paper's method (DESIGN §4).
 /// Extension of §4.3 (not in the paper): the stereo motion test (dynamic::stereoMotionError)
-/// catches motion along the epipolar line, which d_s cannot see (README, *The IDY method*).
+/// catches motion along the epipolar line, which d_s cannot see (docs/method.md).
 struct StereoMotionOptions {
   bool enabled = true;         ///< `stereo_motion_test`
   double chi2 = 18.47;         ///< `stereo_motion_chi2`: χ²₄ at 99.9 %
