@@ -141,6 +141,18 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
               "stereo_motion_sigma_px");
 }
 
+TEST(Config, SolverTimeLimitIsOffUnlessAskedFor) {
+  TempDir dir;
+  const Config c = loadConfig(writeConfig(dir, kConfig, kCamera));
+  EXPECT_FALSE(c.solver.time_limited) << "offline solves must not depend on the clock";
+  EXPECT_DOUBLE_EQ(c.solver.max_solver_time_s, 0.04);  // read, kept for live use
+  const Config live = loadConfig(writeConfig(dir, std::string(kConfig) + "solver_time_limit: 1\n", kCamera));
+  EXPECT_TRUE(live.solver.time_limited);
+  EXPECT_NE(describe(live).find("applied"), std::string::npos);
+  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "solver_time_limit: yes\n", kCamera)); },
+              "solver_time_limit");
+}
+
 TEST(Config, KannalaBrandtCamera) {
   TempDir dir;
   writeFile(dir / "kb.yaml",

@@ -309,17 +309,31 @@ void Estimator::optimize(FrameResult& r) {
   o.linear_solver_type = ceres::DENSE_SCHUR;
   o.trust_region_strategy_type = ceres::DOGLEG;
   o.max_num_iterations = config_.solver.max_num_iterations;
-  o.max_solver_time_in_seconds = config_.solver.max_solver_time_s;
+  if (config_.solver.time_limited) o.max_solver_time_in_seconds = config_.solver.max_solver_time_s;  // live only
   o.num_threads = 1;  // deterministic
   const Isometry3d T_w_b0_before = frames_[0].T_w_b();
+  const auto solve_start = std::chrono::steady_clock::now();
   ceres::Solver::Summary summary;
   ceres::Solve(o, &problem, &summary);
+  const auto post_start = std::chrono::steady_clock::now();
   if (options_.fix_gauge) restoreGauge(T_w_b0_before);
   for (int i = 1; i <= count_; ++i) {
     const imu::NavState s = frames_[i - 1].nav();
     if (frames_[i].pre->needsRepropagation(s.ba, s.bg)) frames_[i].pre->repropagate(s.ba, s.bg);
   }
-  r.optimization_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const auto end = std::chrono::steady_clock::now();
+  using Ms = std::chrono::duration<double, std::milli>;
+  r.optimization_ms = Ms(end - start).count();
+  SolveProfile& p = r.solve;
+  p.build_ms = Ms(solve_start - start).count();
+  p.post_ms = Ms(end - post_start).count();
+  p.preprocess_ms = 1e3 * summary.preprocessor_time_in_seconds;
+  p.residual_ms = 1e3 * summary.residual_evaluation_time_in_seconds;
+  p.jacobian_ms = 1e3 * summary.jacobian_evaluation_time_in_seconds;
+  p.linear_solver_ms = 1e3 * summary.linear_solver_time_in_seconds;
+  p.minimizer_ms = 1e3 * summary.minimizer_time_in_seconds;
+  p.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  p.converged = summary.termination_type == ceres::CONVERGENCE;
 }
 
 void Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {

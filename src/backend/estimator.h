@@ -53,6 +53,20 @@ struct MapPoint {
   std::uint64_t id = 0;
 };
 
+/// Where one window solve spent its time (ms, wall clock) and how it ended (DESIGN §4.10:
+/// offline solves stop on iterations and convergence, never on the clock).
+struct SolveProfile {
+  double build_ms = 0;          ///< building the Ceres problem (factors, weights)
+  double preprocess_ms = 0;     ///< Ceres preprocessing (program, ordering, linear solver set-up)
+  double residual_ms = 0;       ///< residual evaluations alone
+  double jacobian_ms = 0;       ///< residual + Jacobian evaluations
+  double linear_solver_ms = 0;  ///< Schur complement, dense Cholesky, back substitution
+  double minimizer_ms = 0;      ///< the whole trust-region loop (includes the three above)
+  double post_ms = 0;           ///< gauge restoration and IMU repropagation
+  int iterations = 0;           ///< trust-region steps tried
+  bool converged = false;       ///< stopped by a tolerance (not by the iteration or time cap)
+};
+
 /// What the estimator says about one frame.
 struct FrameResult {
   TimeNs t_ns = 0;
@@ -61,6 +75,7 @@ struct FrameResult {
   std::string status;        ///< e.g. "initializing: 4/10 frames", "tracking", "reset: ..."
   imu::NavState state;       ///< body state in the world (valid when initialized)
   double optimization_ms = 0;
+  SolveProfile solve;             ///< breakdown of optimization_ms (zero when no solve ran)
   double marginalization_ms = 0;  ///< sliding the window (marginalization or frame drop)
   int landmarks = 0;         ///< landmarks used in the solve
   int candidates = 0;        ///< candidate landmarks in the solve

@@ -235,6 +235,8 @@ Config loadConfig(const std::string& path) {
   checkPositive(f, "max_cnt", c.tracker.max_cnt);
   checkPositive(f, "max_solver_time", c.solver.max_solver_time_s);
   checkPositive(f, "max_num_iterations", c.solver.max_num_iterations);
+  if (f.root["solver_time_limit"])
+    c.solver.time_limited = getInt(f, f.root, "solver_time_limit", "0 or 1") != 0;
 
   if (f.root["estimate_td"]) c.estimate_td = getInt(f, f.root, "estimate_td", "0 or 1") != 0;
   c.td_s = getDoubleOr(f, "td", 0.0);
@@ -296,9 +298,10 @@ std::string describe(const Config& c) {
       << c.imu.acc_w << ", gyr_w " << c.imu.gyr_w << ", g_norm " << c.imu.g_norm << "\n";
   o << "  tracker: max_cnt " << c.tracker.max_cnt << ", min_dist " << c.tracker.min_dist
     << ", F_threshold " << c.tracker.f_threshold << ", flow_back " << c.tracker.flow_back << "\n";
-  o << "  solver: max_solver_time " << c.solver.max_solver_time_s << " s, max_num_iterations "
-    << c.solver.max_num_iterations << ", keyframe_parallax " << c.solver.keyframe_parallax_px
-    << " px\n";
+  o << "  solver: max_num_iterations " << c.solver.max_num_iterations << ", max_solver_time "
+    << c.solver.max_solver_time_s << " s ("
+    << (c.solver.time_limited ? "applied: solver_time_limit 1, results depend on load" : "not applied: deterministic")
+    << "), keyframe_parallax " << c.solver.keyframe_parallax_px << " px\n";
   o << "  td: " << c.td_s << " s (estimate_td " << c.estimate_td << ")\n";
   o << "  mode: " << toString(c.dynamic.mode) << ", lambda_dy " << c.dynamic.lambda_dy
     << " px^2, lambda_dy_c " << c.dynamic.lambda_dy_c << " px^2, outliers confirmed dynamic: "

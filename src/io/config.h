@@ -31,9 +31,14 @@ struct TrackerOptions {
 
 /// Back-end (sliding-window solver) options.
 struct SolverOptions {
-  double max_solver_time_s = 0.04;  ///< per solve, seconds
+  /// Wall-clock cap per solve, seconds; used only with time_limited (VINS-Fusion's key).
+  double max_solver_time_s = 0.04;
   int max_num_iterations = 8;
   double keyframe_parallax_px = 10.0;  ///< mean parallax for a new keyframe, pixels
+  /// `solver_time_limit` (default 0): cap each solve at max_solver_time_s of wall clock, as
+  /// VINS-Fusion does, for live use. Results then depend on machine load; off, solves stop
+  /// on max_num_iterations and Ceres' convergence tolerances only (deterministic).
+  bool time_limited = false;
 };
 
 /// Parameters of the paper's method (DESIGN §4).

@@ -124,6 +124,7 @@ void StatsRecorder::onFrame(const StereoFrame&, const FrameOutput& out) {
                      {"filter_ms", ff.filter_ms},
                      {"optimization_ms", r.optimization_ms},
                      {"marginalization_ms", r.marginalization_ms},
+                     {"solve_iterations", r.solve.iterations},
                      {"features", ff.features.size()},
                      {"removed", ff.removed.size()},
                      {"landmarks", r.landmarks},
@@ -132,11 +133,11 @@ void StatsRecorder::onFrame(const StereoFrame&, const FrameOutput& out) {
                      {"status", r.status}});
 }
 
-const std::vector<std::string>& timingFields() {
-  static const std::vector<std::string> kFields = {
-      "wall_s",          "realtime_factor",  "mean_tracking_ms",   "mean_filter_ms", "mean_optimization_ms",
-      "mean_marginalization_ms", "tracking_ms", "filter_ms", "optimization_ms", "marginalization_ms"};
-  return kFields;
+bool isTimingField(const std::string& key) {
+  const auto ends = [&](const std::string& tail) {
+    return key.size() >= tail.size() && key.compare(key.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  return ends("_ms") || key == "wall_s" || key == "realtime_factor" || key == "threads";
 }
 
 }  // namespace idyvins::pipeline

@@ -62,7 +62,8 @@ class StatsRecorder final : public FrameObserver {
   nlohmann::json frames_ = nlohmann::json::array();
 };
 
-/// Fields of stats.json that measure time (they differ between identical runs).
-const std::vector<std::string>& timingFields();
+/// Whether a stats.json key measures time (ends in `_ms`, or wall_s, realtime_factor,
+/// threads): the only fields that may differ between runs of the same input and config.
+bool isTimingField(const std::string& key);
 
 }  // namespace idyvins::pipeline

@@ -67,6 +67,8 @@ struct Summary {
   std::size_t frames_without_prior = 0;  ///< idy modes: frames the IDY filter saw without a motion prior
   std::size_t lost_tested = 0, lost_moving = 0;  ///< lost-corner test totals (DESIGN §4.9)
   double sum_tracking_ms = 0, sum_filter_ms = 0, sum_optimization_ms = 0, sum_marginalization_ms = 0;
+  backend::SolveProfile solve_sum;  ///< sums over the frames with a window solve
+  std::size_t solves = 0, solves_converged = 0;
   std::vector<ResetEvent> resets;
   std::string last_status;  ///< the estimator's status at the last frame
 };
