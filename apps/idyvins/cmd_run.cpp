@@ -27,6 +27,7 @@ struct RunArgs {
   std::string config, dataset, out, mode, dump_observations;
   std::size_t max_frames = 0;
   bool solver_time_limit = false;
+  int threads = 1, feedback_delay = -1;
 };
 
 /// Advances a progress bar with every frame.
@@ -157,8 +158,10 @@ void addAte(nlohmann::json& summary, const std::vector<StampedPose>& gt, const p
 
 void printSummary(const nlohmann::json& s, const std::string& out) {
   const double seq_s = s["sequence_s"], wall_s = s["wall_s"];
-  std::printf("%zu frames (%.1f s) in %.1f s (%.1fx real time), mode %s\n", s["frames"].get<std::size_t>(), seq_s,
-              wall_s, seq_s / wall_s, s["mode"].get<std::string>().c_str());
+  std::printf("%zu frames (%.1f s) in %.1f s (%.1fx real time), mode %s, %d thread%s (%s)\n",
+              s["frames"].get<std::size_t>(), seq_s, wall_s, seq_s / wall_s, s["mode"].get<std::string>().c_str(),
+              s["threads"].get<int>(), s["threads"].get<int>() == 1 ? "" : "s",
+              s["threads"].get<int>() == 1 ? "sequential" : "front end of frame k+1 beside the back end of frame k");
   if (s["initialized_at_s"].get<double>() >= 0)
     std::printf("initialized at %.2f s; %zu poses; %zu resets\n", s["initialized_at_s"].get<double>(),
                 s["poses"].get<std::size_t>(), s["resets"].size());
@@ -187,7 +190,12 @@ int runRun(const RunArgs& a) {
   if (!a.mode.empty() && !parseMode(a.mode, config.dynamic.mode))
     throw CLI::ValidationError("--mode", "expected " + modeNames() + ", got '" + a.mode + "'");
   if (a.solver_time_limit) config.solver.time_limited = true;
-  pipeline::System system(config);
+  pipeline::RunOptions run;
+  run.pipelined = a.threads == 2;
+  run.feedback_delay = a.feedback_delay >= 0 ? a.feedback_delay : (run.pipelined ? 1 : 0);
+  if (run.pipelined && run.feedback_delay != 1)
+    throw CLI::ValidationError("--feedback-delay", "a pipelined run (--threads 2) has a feedback delay of 1 frame");
+  pipeline::System system(config, run);
   Input in = openInput(a.dataset, config);
   std::error_code ec;
   std::filesystem::create_directories(a.out, ec);
@@ -208,6 +216,8 @@ int runRun(const RunArgs& a) {
 
   const pipeline::Result result = system.finish();
   nlohmann::json summary = summaryJson(result, system.mode(), wall_s);
+  summary["threads"] = system.threads();
+  summary["feedback_delay"] = system.runOptions().feedback_delay;
   if (in.has_masks) summary["classification"] = pipeline::toJson(observations.classify(result));
   if (!a.dump_observations.empty()) observations.writeCsv(a.dump_observations, result);
   writeFiles(a.out, result);
@@ -237,6 +247,15 @@ void registerRun(CLI::App& app, int& exit_code) {
   cmd->add_option("-o,--out", a->out, "output folder")->required();
   cmd->add_option("--mode", a->mode, "overrides the config's mode: " + modeNames());
   cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)");
+  cmd->add_option("--threads", a->threads,
+                  "1: front end then back end for each frame (default); 2: pipelined, the front end of frame\n"
+                  "k+1 runs beside the back end of frame k (its motion prior comes from the state of frame k-1\n"
+                  "propagated with the IMU; deterministic, equal to --threads 1 --feedback-delay 1)")
+      ->check(CLI::Range(1, 2));
+  cmd->add_option("--feedback-delay", a->feedback_delay,
+                  "frames between the back end's state and the front end that uses it: 0 (default with\n"
+                  "--threads 1) or 1 (what --threads 2 does; with --threads 1 it reproduces a pipelined run)")
+      ->check(CLI::Range(0, 1));
   cmd->add_flag("--solver-time-limit", a->solver_time_limit,
                "cap each solve at the config's max_solver_time of wall clock, as VINS-Fusion does (live use;\n"
                "results then depend on the machine's load). Same as solver_time_limit: 1 in the config");

@@ -1,6 +1,14 @@
 #include "pipeline/system.h"
 
+#include <condition_variable>
+#include <functional>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+#include <utility>
+
 #include "core/error.h"
+#include "imu/preintegration.h"
 
 namespace idyvins::pipeline {
 namespace {
@@ -29,37 +37,149 @@ std::optional<Eigen::Vector3d> triangulateInRange(const Eigen::Isometry3d& T_w_c
 
 }  // namespace
 
-System::System(const Config& config)
+/// The back-end thread of a pipelined run: runs one job at a time, handed over by the caller.
+class System::Worker {
+ public:
+  Worker() : thread_([this] { loop(); }) {}
+  ~Worker() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  void submit(std::function<void()> job) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    job_ = std::move(job);
+    busy_ = true;
+    cv_.notify_all();
+  }
+  /// Waits until the submitted job has finished; rethrows what it threw.
+  void wait() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    cv_.wait(lock, [this] { return !busy_; });
+    if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+  }
+
+ private:
+  void loop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (true) {
+      cv_.wait(lock, [this] { return stop_ || job_; });
+      if (!job_) return;  // stopped
+      auto job = std::move(job_);
+      job_ = nullptr;
+      lock.unlock();
+      std::exception_ptr error;
+      try {
+        job();
+      } catch (...) {
+        error = std::current_exception();
+      }
+      lock.lock();
+      error_ = error;
+      busy_ = false;
+      cv_.notify_all();
+    }
+  }
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::function<void()> job_;
+  bool busy_ = false, stop_ = false;
+  std::exception_ptr error_;
+  std::thread thread_;
+};
+
+System::System(const Config& config, const RunOptions& run)
     : config_(checkedConfig(config)),
       mode_(config.dynamic.mode),
+      run_(run),
       front_end_(config_, mode_),
-      estimator_(config_, estimatorOptionsFor(mode_, config_)) {}
+      estimator_(config_, estimatorOptionsFor(mode_, config_)) {
+  if (run_.feedback_delay != 0 && run_.feedback_delay != 1)
+    throw std::invalid_argument("RunOptions::feedback_delay must be 0 or 1");
+  if (run_.pipelined && run_.feedback_delay != 1)
+    throw std::invalid_argument("a pipelined run needs RunOptions::feedback_delay 1");
+  if (run_.pipelined) worker_ = std::make_unique<Worker>();
+}
 
 System::~System() = default;
 
-void System::addImu(const ImuSample& sample) { estimator_.addImu(sample); }
-
-frontend::MotionPrior System::priorFor(TimeNs t_ns) const {
-  const backend::LatestState latest = estimator_.latest();
-  if (!usesIdyFilter(mode_) || !latest.valid) return {};
-  return dynamic::motionPrior(latest.state, latest.t_ns, t_ns, estimator_.imuHistory(), config_.imu,
-                              config_.T_b_c[0]);
+void System::addImu(const ImuSample& sample) {
+  if (!imu_.empty() && sample.t_ns <= imu_.back().t_ns) return;  // as the estimator: strictly increasing
+  imu_.push_back(sample);
 }
 
-const FrameOutput& System::addFrame(const StereoFrame& frame) {
-  FrameOutput& out = last_;
-  out = FrameOutput{};
-  out.index = summary_.frames;
+frontend::MotionPrior System::priorFor(TimeNs t_prev, TimeNs t_cur) const {
+  const backend::LatestState& s = snapshot_;
+  if (!usesIdyFilter(mode_) || !s.valid) return {};
+  imu::NavState from = s.state;
+  TimeNs t_from = s.t_ns;
+  // The newest finished state is older than the previous frame (feedback_delay 1): predict
+  // it to the previous frame's time with the IMU and its own biases.
+  if (run_.feedback_delay == 1 && t_prev > t_from) {
+    if (imu_.empty() || imu_.front().t_ns > t_from || imu_.back().t_ns < t_prev) return {};
+    from = imu::integrateBetween(imu_, t_from, t_prev, from.ba, from.bg, config_.imu).predict(from);
+    t_from = t_prev;
+  }
+  return dynamic::motionPrior(from, t_from, t_cur, imu_, config_.imu, config_.T_b_c[0]);
+}
+
+const FrameOutput* System::addFrame(const StereoFrame& frame) {
+  auto f = std::make_unique<InFlight>();
+  f->input = frame;  // images are reference-counted: no copy
+  FrameOutput& out = f->out;
+  out.index = summary_.frames + (in_flight_ ? 1 : 0);
   out.t_ns = frame.t_ns;
-  out.features = front_end_.track(frame, priorFor(frame.t_ns));
+  out.features = front_end_.track(frame, priorFor(last_frame_t_ns_, frame.t_ns));
   out.idy = front_end_.idyStats();
+  last_frame_t_ns_ = frame.t_ns;
+  // The estimator gets the IMU samples up to this frame with the frame's back end.
+  while (imu_to_estimator_ < imu_.size() && imu_[imu_to_estimator_].t_ns <= frame.t_ns)
+    f->imu.push_back(imu_[imu_to_estimator_++]);
+  done_.reset();
+  completeInFlight();  // feedback_delay 1: the previous frame's back end
   mapLostMoving(out.features, out);
-  out.estimate = estimator_.addFrame(out.features);
-  mapEliminated(out.features, out);
-  if (out.estimate.reset) front_end_.reset();
-  account(out);
-  for (FrameObserver* o : observers_) o->onFrame(frame, out);
-  return out;
+  in_flight_ = std::move(f);
+  if (run_.pipelined) {
+    worker_->submit([this, job = in_flight_.get()] { backEnd(*job); });
+  } else if (run_.feedback_delay == 0) {
+    completeInFlight();
+  }
+  return done_ ? &done_->out : nullptr;
+}
+
+void System::backEnd(InFlight& f) {
+  for (const ImuSample& s : f.imu) estimator_.addImu(s);
+  f.out.estimate = estimator_.addFrame(f.out.features);
+  mapEliminated(f.out.features, f.out);
+}
+
+void System::completeInFlight() {
+  if (!in_flight_) return;
+  if (run_.pipelined)
+    worker_->wait();
+  else
+    backEnd(*in_flight_);
+  done_ = std::move(in_flight_);
+  finalize(*done_);
+}
+
+void System::finalize(InFlight& f) {
+  if (f.out.estimate.reset) front_end_.reset();
+  snapshot_ = estimator_.latest();
+  // The next priors start at the newest state (or, before there is one, at a frame not
+  // older than this one): drop the samples before the last one at or before that time.
+  const TimeNs from = snapshot_.valid ? std::min(snapshot_.t_ns, f.out.t_ns) : f.out.t_ns;
+  std::size_t drop = 0;
+  while (drop + 1 < imu_to_estimator_ && imu_[drop + 1].t_ns <= from) ++drop;
+  if (drop > 0) {
+    imu_.erase(imu_.begin(), imu_.begin() + static_cast<std::ptrdiff_t>(drop));
+    imu_to_estimator_ -= drop;
+  }
+  account(f.out);
+  for (FrameObserver* o : observers_) o->onFrame(f.input, f.out);
 }
 
 void System::mapLostMoving(const frontend::FeatureFrame& ff, FrameOutput& out) {
@@ -119,6 +239,7 @@ void System::account(FrameOutput& out) {
 }
 
 Result System::finish() {
+  completeInFlight();
   estimator_.flushMap();
   Result result;
   result.static_map = estimator_.staticMap();

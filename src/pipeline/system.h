@@ -7,7 +7,7 @@
 //   pipeline::System system(loadConfig("config.yaml"));
 //   for (const auto& m : measurements)           // time order, IMU before a same-stamp frame
 //     if (auto* imu = std::get_if<ImuSample>(&m)) system.addImu(*imu);
-//     else use(system.addFrame(std::get<StereoFrame>(m)));  // FrameOutput
+//     else if (const FrameOutput* out = system.addFrame(std::get<StereoFrame>(m))) use(*out);
 //   const pipeline::Result result = system.finish();      // maps, trajectory, counters
 //
 // Observers (evaluation against masks, stats, progress) subscribe with addObserver().
@@ -83,42 +83,84 @@ struct Result {
   Summary summary;
 };
 
+/// How System runs the two halves of a frame (DESIGN §4.10). The data flow is fixed, so
+/// the results never depend on thread timing:
+/// - feedback_delay 0 (sequential default): frame k's front end uses the motion prior from
+///   the state of frame k−1 and sees a reset detected at frame k−1;
+/// - feedback_delay 1: frame k's front end runs before frame k−1's back end has finished,
+///   so its prior comes from the state of frame k−2 propagated with the IMU to frame k−1,
+///   and a reset detected at frame k−1 reaches the tracker at frame k+1.
+/// pipelined = true runs frame k's front end on the calling thread while frame k−1's back
+/// end runs on a second thread; it needs feedback_delay 1 and gives exactly the outputs
+/// of the sequential run with feedback_delay 1.
+struct RunOptions {
+  bool pipelined = false;
+  int feedback_delay = 0;  ///< 0 or 1 frames
+  /// The options of a pipelined run (two threads, feedback_delay 1).
+  static RunOptions twoThreads() { return {true, 1}; }
+};
+
 /// The whole per-frame system of one mode: front end (tracker + the mode's filter, IDY
 /// motion prior from the estimator's newest state), estimator, maps. One per sequence.
 class System {
  public:
-  /// Mode from config.dynamic.mode. Throws InputError unless the config is stereo + IMU.
-  explicit System(const Config& config);
+  /// Mode from config.dynamic.mode. Throws InputError unless the config is stereo + IMU,
+  /// std::invalid_argument for inconsistent run options.
+  explicit System(const Config& config, const RunOptions& run = {});
   ~System();
   System(const System&) = delete;
   System& operator=(const System&) = delete;
 
-  /// Observers are called in the order added, after each frame; not owned.
+  /// Observers are called in the order added, for every frame in order, on the calling
+  /// thread, once the frame's back end has finished; not owned.
   void addObserver(FrameObserver& observer) { observers_.push_back(&observer); }
   void addImu(const ImuSample& sample);
-  /// Processes one stereo frame (after the IMU samples up to its time stamp).
-  const FrameOutput& addFrame(const StereoFrame& frame);
-  /// Moves the window's static landmarks into the static map and returns the maps, the
-  /// trajectory and the counters. Call once, at the end.
+  /// Processes one stereo frame (after the IMU samples up to its time stamp). Returns the
+  /// output of the newest frame whose back end finished during this call: this frame with
+  /// feedback_delay 0, the previous one with 1 (null for the first frame). The pointer is
+  /// valid until the next call.
+  const FrameOutput* addFrame(const StereoFrame& frame);
+  /// Completes the frame still in flight (its observers are called), moves the window's
+  /// static landmarks into the static map and returns the maps, the trajectory and the
+  /// counters. Call once, at the end.
   Result finish();
 
   Mode mode() const { return mode_; }
+  const RunOptions& runOptions() const { return run_; }
+  /// Threads the system computes on (1, or 2 when pipelined).
+  int threads() const { return run_.pipelined ? 2 : 1; }
   const Config& config() const { return config_; }
-  const backend::Estimator& estimator() const { return estimator_; }
   const Summary& summary() const { return summary_; }
 
  private:
-  frontend::MotionPrior priorFor(TimeNs t_ns) const;
+  class Worker;
+  /// A frame whose front end is done and whose back end is pending or running.
+  struct InFlight {
+    StereoFrame input;
+    FrameOutput out;
+    std::vector<ImuSample> imu;  ///< samples up to the frame's time, not yet given to the estimator
+  };
+  frontend::MotionPrior priorFor(TimeNs t_prev, TimeNs t_cur) const;
+  void backEnd(InFlight& f);  ///< estimator and dynamic map of one frame (the worker's job)
+  void completeInFlight();     ///< waits for (or runs) the back end in flight, then finalizes it
+  void finalize(InFlight& f);
   void mapLostMoving(const frontend::FeatureFrame& ff, FrameOutput& out);
   void mapEliminated(const frontend::FeatureFrame& ff, FrameOutput& out);
   void account(FrameOutput& out);
 
   Config config_;
   Mode mode_;
+  RunOptions run_;
   FrontEnd front_end_;
   backend::Estimator estimator_;
   std::vector<FrameObserver*> observers_;
-  FrameOutput last_;
+  std::unique_ptr<InFlight> in_flight_;  ///< feedback_delay 1: the frame whose back end is pending
+  std::unique_ptr<InFlight> done_;       ///< the frame last finalized (what addFrame returns)
+  std::unique_ptr<Worker> worker_;       ///< pipelined: the back-end thread
+  std::vector<ImuSample> imu_;           ///< samples not yet handed to the estimator, and those the prior needs
+  std::size_t imu_to_estimator_ = 0;     ///< imu_[i] for i < this went to the estimator already
+  backend::LatestState snapshot_;        ///< the estimator's newest state after the last finalized frame
+  TimeNs last_frame_t_ns_ = -1;          ///< time of the previous frame given to the front end
   Summary summary_;
   std::vector<StampedState> trajectory_;
   std::vector<backend::MapPoint> eliminated_;
