@@ -309,6 +309,7 @@ void Estimator::optimize(FrameResult& r) {
   o.linear_solver_type = ceres::DENSE_SCHUR;
   o.trust_region_strategy_type = ceres::DOGLEG;
   o.max_num_iterations = config_.solver.max_num_iterations;
+  o.function_tolerance = config_.solver.function_tolerance;
   if (config_.solver.time_limited) o.max_solver_time_in_seconds = config_.solver.max_solver_time_s;  // live only
   o.num_threads = 1;  // deterministic
   const Isometry3d T_w_b0_before = frames_[0].T_w_b();

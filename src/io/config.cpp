@@ -237,6 +237,8 @@ Config loadConfig(const std::string& path) {
   checkPositive(f, "max_num_iterations", c.solver.max_num_iterations);
   if (f.root["solver_time_limit"])
     c.solver.time_limited = getInt(f, f.root, "solver_time_limit", "0 or 1") != 0;
+  c.solver.function_tolerance = getDoubleOr(f, "solver_function_tolerance", c.solver.function_tolerance);
+  checkPositive(f, "solver_function_tolerance", c.solver.function_tolerance);
 
   if (f.root["estimate_td"]) c.estimate_td = getInt(f, f.root, "estimate_td", "0 or 1") != 0;
   c.td_s = getDoubleOr(f, "td", 0.0);
@@ -301,7 +303,8 @@ std::string describe(const Config& c) {
   o << "  solver: max_num_iterations " << c.solver.max_num_iterations << ", max_solver_time "
     << c.solver.max_solver_time_s << " s ("
     << (c.solver.time_limited ? "applied: solver_time_limit 1, results depend on load" : "not applied: deterministic")
-    << "), keyframe_parallax " << c.solver.keyframe_parallax_px << " px\n";
+    << "), function_tolerance " << c.solver.function_tolerance << ", keyframe_parallax "
+    << c.solver.keyframe_parallax_px << " px\n";
   o << "  td: " << c.td_s << " s (estimate_td " << c.estimate_td << ")\n";
   o << "  mode: " << toString(c.dynamic.mode) << ", lambda_dy " << c.dynamic.lambda_dy
     << " px^2, lambda_dy_c " << c.dynamic.lambda_dy_c << " px^2, outliers confirmed dynamic: "

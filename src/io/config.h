@@ -39,6 +39,9 @@ struct SolverOptions {
   /// VINS-Fusion does, for live use. Results then depend on machine load; off, solves stop
   /// on max_num_iterations and Ceres' convergence tolerances only (deterministic).
   bool time_limited = false;
+  /// `solver_function_tolerance` (default 1e-6, Ceres' own): a solve has converged when an
+  /// iteration lowers the cost by less than this fraction of it.
+  double function_tolerance = 1e-6;
 };
 
 /// Parameters of the paper's method (DESIGN §4).
