@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -17,6 +18,7 @@
 
 #include "commands.h"
 #include "core/error.h"
+#include "io/config.h"
 #include "progress.h"
 
 namespace fs = std::filesystem;
@@ -25,7 +27,7 @@ namespace idyvins::app {
 namespace {
 
 struct BenchArgs {
-  std::string suite = "standard", out, seeds = "1", data;
+  std::string suite = "standard", out, seeds = "1", data, modes;
   double duration = 60.0;
   bool ablations = false;
   bool reuse_runs = false;
@@ -82,6 +84,20 @@ std::vector<int> parseSeeds(const std::string& text) {
     }
   }
   return seeds;
+}
+
+std::vector<std::string> parseModes(const std::string& text) {
+  std::vector<std::string> modes;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    Mode m;
+    if (!parseMode(item, m)) throw CLI::ValidationError("--modes", "expected " + modeNames() + ", got '" + item + "'");
+    modes.push_back(item);
+  }
+  if (std::find(modes.begin(), modes.end(), "baseline") == modes.end())
+    throw CLI::ValidationError("--modes", "the tables compare with baseline: include it");
+  return modes;
 }
 
 const std::vector<std::string> kScenes = {"city", "parking_lot"}, kLevels = {"none", "low", "mid", "high"};
@@ -284,6 +300,7 @@ int runBench(const BenchArgs& a) {
   if (ec) throw InputError(a.out, "cannot create folder: " + ec.message());
   std::vector<std::string> modes = {"baseline", "ransac", "seg", "idy"};
   if (a.ablations) modes.insert(modes.end(), {"idy-pre", "idy-ba"});
+  if (!a.modes.empty()) modes = parseModes(a.modes);
 
   std::vector<Job> jobs;
   for (const auto& [name, ds] : simulateMissing(a, exe, data, runs))
@@ -319,6 +336,7 @@ void registerBench(CLI::App& app, int& exit_code) {
   cmd->add_option("--data", a->data, "where the simulated datasets live (default OUT/data)");
   cmd->add_option("-j,--jobs", a->jobs, "runs in parallel (default 2)")->check(CLI::Range(1, 64));
   cmd->add_flag("--ablations", a->ablations, "also run idy-pre and idy-ba");
+  cmd->add_option("--modes", a->modes, "comma-separated modes to run instead (must include baseline), e.g. baseline,ransac,idy");
   cmd->add_flag("--reuse-runs", a->reuse_runs,
                 "keep runs that already have OUT/runs/<sequence>_<mode>/stats.json (resume an interrupted\n"
                 "benchmark, or re-run only the modes whose run folders were deleted)");
