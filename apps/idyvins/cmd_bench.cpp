@@ -32,6 +32,7 @@ struct BenchArgs {
   bool ablations = false;
   bool reuse_runs = false;
   int jobs = 2;
+  int run_threads = 1;
 };
 
 std::string self() {
@@ -134,7 +135,8 @@ void runJobs(const std::vector<Job>& jobs, const BenchArgs& a, const std::string
         continue;
       }
       const std::string cmd = quote(exe) + " run --config " + quote(j.dataset + "/config/sim_stereo_imu_config.yaml") +
-                              " --dataset " + quote(j.dataset) + " --out " + quote(j.out) + " --mode " + j.mode + " > " +
+                              " --dataset " + quote(j.dataset) + " --out " + quote(j.out) + " --mode " + j.mode +
+                              " --threads " + std::to_string(a.run_threads) + " > " +
                               quote(j.out + ".log") + " 2>&1";
       (void)std::system(cmd.c_str());  // a failed run is reported as x in the tables
       ++done;
@@ -336,6 +338,10 @@ void registerBench(CLI::App& app, int& exit_code) {
   cmd->add_option("--data", a->data, "where the simulated datasets live (default OUT/data)");
   cmd->add_option("-j,--jobs", a->jobs, "runs in parallel (default 2)")->check(CLI::Range(1, 64));
   cmd->add_flag("--ablations", a->ablations, "also run idy-pre and idy-ba");
+  cmd->add_option("--threads", a->run_threads,
+                  "threads of each run: 1 (default) or 2 (pipelined runs, `run --threads 2`; use --jobs 1\n"
+                  "so that runs do not share the cores)")
+      ->check(CLI::Range(1, 2));
   cmd->add_option("--modes", a->modes, "comma-separated modes to run instead (must include baseline), e.g. baseline,ransac,idy");
   cmd->add_flag("--reuse-runs", a->reuse_runs,
                 "keep runs that already have OUT/runs/<sequence>_<mode>/stats.json (resume an interrupted\n"
