@@ -184,20 +184,10 @@ camera::CameraParams loadCameraFile(const std::string& path) {
   return cam;
 }
 
-Config loadConfig(const std::string& path) {
-  const YamlFile f = loadYaml(path);
-  Config c;
-  c.path = path;
-  c.use_imu = getInt(f, f.root, "imu", "1 to use the IMU, 0 for vision only") != 0;
-  c.num_cam = getInt(f, f.root, "num_of_cam", "1 or 2");
-  if (c.num_cam != 1 && c.num_cam != 2)
-    throw InputError(path, lineOf(f.root["num_of_cam"]),
-                     "key 'num_of_cam': expected 1 or 2, got " + std::to_string(c.num_cam));
-  c.image_width = getInt(f, f.root, "image_width", "pixels");
-  c.image_height = getInt(f, f.root, "image_height", "pixels");
-  if (c.image_width <= 0 || c.image_height <= 0)
-    throw InputError(path, lineOf(f.root["image_width"]), "expected a positive image size");
+namespace {
 
+/// cam0/cam1: camodocal files (relative to the config's folder) and body_T_camX.
+void readCameras(const YamlFile& f, const std::string& path, Config& c) {
   const fs::path folder = fs::path(path).parent_path();
   for (int i = 0; i < c.num_cam; ++i) {
     const std::string key = "cam" + std::to_string(i) + "_calib";
@@ -214,7 +204,10 @@ Config loadConfig(const std::string& path) {
     c.cams.push_back(cam);
     c.T_b_c.push_back(getTransform(f, "body_T_cam" + std::to_string(i)));
   }
+}
 
+/// IMU noise, tracker and solver keys.
+void readImuTrackerSolver(const YamlFile& f, Config& c) {
   if (c.use_imu) {
     c.imu.acc_n = getDouble(f, f.root, "acc_n", "accelerometer noise density");
     c.imu.gyr_n = getDouble(f, f.root, "gyr_n", "gyroscope noise density");
@@ -239,10 +232,10 @@ Config loadConfig(const std::string& path) {
     c.solver.time_limited = getInt(f, f.root, "solver_time_limit", "0 or 1") != 0;
   c.solver.function_tolerance = getDoubleOr(f, "solver_function_tolerance", c.solver.function_tolerance);
   checkPositive(f, "solver_function_tolerance", c.solver.function_tolerance);
+}
 
-  if (f.root["estimate_td"]) c.estimate_td = getInt(f, f.root, "estimate_td", "0 or 1") != 0;
-  c.td_s = getDoubleOr(f, "td", 0.0);
-
+/// The IDY keys (DESIGN §4), all optional.
+void readDynamic(const YamlFile& f, const std::string& path, Config& c) {
   c.dynamic.lambda_dy = getDoubleOr(f, "lambda_dy", 4.0);
   c.dynamic.lambda_dy_c = getDoubleOr(f, "lambda_dy_c", 1.0);
   if (f.root["confirm_outliers_dynamic"])
@@ -275,6 +268,30 @@ Config loadConfig(const std::string& path) {
     throw InputError(path, "lambda_dy_c (" + std::to_string(c.dynamic.lambda_dy_c) +
                                ") must not exceed lambda_dy (" +
                                std::to_string(c.dynamic.lambda_dy) + ")");
+}
+
+}  // namespace
+
+Config loadConfig(const std::string& path) {
+  const YamlFile f = loadYaml(path);
+  Config c;
+  c.path = path;
+  c.use_imu = getInt(f, f.root, "imu", "1 to use the IMU, 0 for vision only") != 0;
+  c.num_cam = getInt(f, f.root, "num_of_cam", "1 or 2");
+  if (c.num_cam != 1 && c.num_cam != 2)
+    throw InputError(path, lineOf(f.root["num_of_cam"]),
+                     "key 'num_of_cam': expected 1 or 2, got " + std::to_string(c.num_cam));
+  c.image_width = getInt(f, f.root, "image_width", "pixels");
+  c.image_height = getInt(f, f.root, "image_height", "pixels");
+  if (c.image_width <= 0 || c.image_height <= 0)
+    throw InputError(path, lineOf(f.root["image_width"]), "expected a positive image size");
+
+  readCameras(f, path, c);
+  readImuTrackerSolver(f, c);
+  if (f.root["estimate_td"]) c.estimate_td = getInt(f, f.root, "estimate_td", "0 or 1") != 0;
+  c.td_s = getDoubleOr(f, "td", 0.0);
+
+  readDynamic(f, path, c);
   return c;
 }
 
