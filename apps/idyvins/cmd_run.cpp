@@ -27,7 +27,7 @@ struct RunArgs {
   std::string config, dataset, out, mode, dump_observations;
   std::size_t max_frames = 0;
   bool solver_time_limit = false;
-  int threads = 1, feedback_delay = -1;
+  int threads = 2, feedback_delay = -1;
 };
 
 /// Advances a progress bar with every frame.
@@ -248,13 +248,13 @@ void registerRun(CLI::App& app, int& exit_code) {
   cmd->add_option("--mode", a->mode, "overrides the config's mode: " + modeNames());
   cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)");
   cmd->add_option("--threads", a->threads,
-                  "1: front end then back end for each frame (default); 2: pipelined, the front end of frame\n"
-                  "k+1 runs beside the back end of frame k (its motion prior comes from the state of frame k-1\n"
-                  "propagated with the IMU; deterministic, equal to --threads 1 --feedback-delay 1)")
+                  "2 (default): pipelined, the front end of frame k+1 runs beside the back end of frame k (its\n"
+                  "motion prior comes from the state of frame k-1 propagated with the IMU; deterministic, equal\n"
+                  "to --threads 1 --feedback-delay 1); 1: front end then back end for each frame")
       ->check(CLI::Range(1, 2));
   cmd->add_option("--feedback-delay", a->feedback_delay,
-                  "frames between the back end's state and the front end that uses it: 0 (default with\n"
-                  "--threads 1) or 1 (what --threads 2 does; with --threads 1 it reproduces a pipelined run)")
+                  "frames between the back end's state and the front end that uses it: 1 (what --threads 2\n"
+                  "does; with --threads 1 it reproduces a pipelined run) or 0 (the default with --threads 1)")
       ->check(CLI::Range(0, 1));
   cmd->add_flag("--solver-time-limit", a->solver_time_limit,
                "cap each solve at the config's max_solver_time of wall clock, as VINS-Fusion does (live use;\n"
