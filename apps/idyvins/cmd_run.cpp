@@ -210,11 +210,11 @@ int runRun(const RunArgs& a) {
   system.addObserver(progress);
   const auto wall_start = std::chrono::steady_clock::now();
   const std::size_t frames = drive(*in.source, system, total);
+  if (frames == 0) throw InputError(a.dataset, "no stereo frames");
+  const pipeline::Result result = system.finish();  // completes the frame still in flight
   progress.finish();
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  if (frames == 0) throw InputError(a.dataset, "no stereo frames");
 
-  const pipeline::Result result = system.finish();
   nlohmann::json summary = summaryJson(result, system.mode(), wall_s);
   summary["threads"] = system.threads();
   summary["feedback_delay"] = system.runOptions().feedback_delay;
