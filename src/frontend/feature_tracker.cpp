@@ -169,6 +169,16 @@ void FeatureTracker::judgeLost(const std::vector<cv::Mat>& pyr, const cv::Mat& i
   }
 }
 
+std::vector<uchar> FeatureTracker::kltFromGuess(const std::vector<cv::Mat>& from, const std::vector<cv::Mat>& to,
+                                                const std::vector<cv::Point2f>& p0, std::vector<cv::Point2f>& p1) const {
+  std::vector<uchar> status;
+  std::vector<float> err;
+  const cv::Size win(params_.klt_window, params_.klt_window);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations, params_.klt_epsilon);
+  cv::calcOpticalFlowPyrLK(from, to, p0, p1, status, err, win, params_.klt_levels, crit, cv::OPTFLOW_USE_INITIAL_FLOW);
+  return status;
+}
+
 std::vector<std::size_t> FeatureTracker::notFoundNearPrediction(const std::vector<cv::Mat>& pyr, const cv::Mat& image,
                                                                 const std::vector<LostJudged>& judged) const {
   // KLT started at the static prediction (a wider basin than the patch alignment alone).
@@ -177,12 +187,7 @@ std::vector<std::size_t> FeatureTracker::notFoundNearPrediction(const std::vecto
     p0.push_back(j.track->uv);
     p1.emplace_back(static_cast<float>(j.uv_pred.x()), static_cast<float>(j.uv_pred.y()));
   }
-  std::vector<uchar> status;
-  std::vector<float> err;
-  const cv::Size win(params_.klt_window, params_.klt_window);
-  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations, params_.klt_epsilon);
-  cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, p0, p1, status, err, win, params_.klt_levels, crit,
-                           cv::OPTFLOW_USE_INITIAL_FLOW);
+  const std::vector<uchar> status = kltFromGuess(prev_pyr_, pyr, p0, p1);
   std::vector<std::size_t> not_found;
   for (std::size_t i = 0; i < judged.size(); ++i) {
     const Track& t = *judged[i].track;
@@ -221,12 +226,7 @@ std::vector<uchar> FeatureTracker::hiddenAtPrediction(const std::vector<cv::Mat>
     cams_[1]->project(T_c1_c0_ * judged[i].p_pred, uv_r);
     pr.emplace_back(static_cast<float>(uv_r.x()), static_cast<float>(uv_r.y()));
   }
-  std::vector<uchar> st;
-  std::vector<float> err;
-  const cv::Size win(params_.klt_window, params_.klt_window);
-  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations, params_.klt_epsilon);
-  cv::calcOpticalFlowPyrLK(pyr, right_pyr_, pl, pr, st, err, win, params_.klt_levels, crit,
-                           cv::OPTFLOW_USE_INITIAL_FLOW);
+  const std::vector<uchar> st = kltFromGuess(pyr, right_pyr_, pl, pr);
   for (std::size_t j = 0; j < not_found.size(); ++j) {
     const LostJudged& c = judged[not_found[j]];
     Eigen::Vector2d xy_l, xy_r;

@@ -136,6 +136,9 @@ class FeatureTracker {
     Eigen::Vector2d uv_pred;  ///< its pixel
     double tol_px;
   };
+  /// Pyramidal KLT on all levels from p0 in `from` to `to`, started at p1 (updated); the status.
+  std::vector<uchar> kltFromGuess(const std::vector<cv::Mat>& from, const std::vector<cv::Mat>& to,
+                                  const std::vector<cv::Point2f>& p0, std::vector<cv::Point2f>& p1) const;
   /// Indices of the judged corners neither KLT nor the first patch finds near the prediction.
   std::vector<std::size_t> notFoundNearPrediction(const std::vector<cv::Mat>& pyr, const cv::Mat& image,
                                                   const std::vector<LostJudged>& judged) const;
