@@ -65,6 +65,18 @@ struct SolveProfile {
   double post_ms = 0;           ///< gauge restoration and IMU repropagation
   int iterations = 0;           ///< trust-region steps tried
   bool converged = false;       ///< stopped by a tolerance (not by the iteration or time cap)
+  /// Sums the times and iterations of another solve into this one (converged is left as is).
+  SolveProfile& operator+=(const SolveProfile& o) {
+    build_ms += o.build_ms;
+    preprocess_ms += o.preprocess_ms;
+    residual_ms += o.residual_ms;
+    jacobian_ms += o.jacobian_ms;
+    linear_solver_ms += o.linear_solver_ms;
+    minimizer_ms += o.minimizer_ms;
+    post_ms += o.post_ms;
+    iterations += o.iterations;
+    return *this;
+  }
 };
 
 /// What the estimator says about one frame.

@@ -218,10 +218,11 @@ std::vector<bool> IdyFilter::eliminateAndMark(std::vector<frontend::FilterItem>&
 }
 
 bool IdyFilter::nextAnchor(const frontend::FilterItem& it, const frontend::MotionPrior& prior, const Matrix3d& R,
-                           double sigma_p2, StereoAnchor& anchor) const {
+                           double sigma_p2, StereoAnchor& anchor, int& strikes_before) const {
   // The anchor: the stereo observation the current one is compared with, and the camera
   // motion since, chained from the per-frame priors (P_anchor = R P_cur + t).
   const auto old = stereo_anchors_.find(it.feature->id);
+  strikes_before = old != stereo_anchors_.end() ? old->second.strikes : 0;
   if (old != stereo_anchors_.end() && (old->second.steps < o_.stereo.anchor_frames || !it.prev_has_right)) {
     anchor = old->second;
     anchor.t = anchor.R * prior.t_prev_cur + anchor.t;
@@ -252,10 +253,9 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
   for (std::size_t k = 0; k < tracked.size(); ++k) {
     auto& it = items[tracked[k]];
     if (removed[k]) continue;
-    const auto old = stereo_anchors_.find(it.feature->id);
-    const int strikes_before = old != stereo_anchors_.end() ? old->second.strikes : 0;
     StereoAnchor anchor;
-    if (!nextAnchor(it, *ctx.prior, R, sigma_p2, anchor)) continue;
+    int strikes_before = 0;
+    if (!nextAnchor(it, *ctx.prior, R, sigma_p2, anchor, strikes_before)) continue;
     StereoAnchor& kept = anchors[it.feature->id] = anchor;
     if (!it.feature->has_right) continue;
     ++stats_.stereo_tested;

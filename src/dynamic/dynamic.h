@@ -136,9 +136,9 @@ class IdyFilter final : public frontend::FeatureFilter {
                   const std::vector<std::size_t>& tracked, const std::vector<bool>& removed, const Eigen::Matrix3d& R,
                   double fx);
   /// This frame's anchor of an item (chained from its old one, or its previous stereo
-  /// observation); false when it has none.
+  /// observation) and the old anchor's failure count; false when it has no anchor.
   bool nextAnchor(const frontend::FilterItem& it, const frontend::MotionPrior& prior, const Eigen::Matrix3d& R,
-                  double sigma_p2, StereoAnchor& anchor) const;
+                  double sigma_p2, StereoAnchor& anchor, int& strikes_before) const;
   void markCandidate(frontend::Feature& f);
 };
 

@@ -222,17 +222,9 @@ void System::account(FrameOutput& out) {
   s.sum_optimization_ms += r.optimization_ms;
   s.sum_marginalization_ms += r.marginalization_ms;
   if (r.solve.iterations > 0) {
-    backend::SolveProfile& t = s.solve_sum;
     ++s.solves;
     s.solves_converged += r.solve.converged;
-    t.build_ms += r.solve.build_ms;
-    t.preprocess_ms += r.solve.preprocess_ms;
-    t.residual_ms += r.solve.residual_ms;
-    t.jacobian_ms += r.solve.jacobian_ms;
-    t.linear_solver_ms += r.solve.linear_solver_ms;
-    t.minimizer_ms += r.solve.minimizer_ms;
-    t.post_ms += r.solve.post_ms;
-    t.iterations += r.solve.iterations;
+    s.solve_sum += r.solve;
   }
   s.last_status = r.status;
   eliminated_.insert(eliminated_.end(), out.eliminated_points.begin(), out.eliminated_points.end());
