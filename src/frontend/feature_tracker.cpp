@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "core/so3.h"
+#include "frontend/corner_detector.h"
 
 namespace idyvins::frontend {
 
@@ -107,7 +108,7 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Ma
       continue;
     }
     tracks.push_back({old.id, p1[i], xy, old.length + 1, old.patch, A_patch});
-    prev.push_back({toEigen(old.uv), old.xy, old.has_right, old.xy_right});
+    prev.push_back({toEigen(old.uv), old.xy, old.has_right, old.xy_right, old.uv_right});
   }
 }
 
@@ -258,8 +259,11 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
   const int n_max = config_.tracker.max_cnt - static_cast<int>(tracks.size());
   detected = 0;
   if (n_max <= 0) return;
-  std::vector<cv::Point2f> corners;
-  cv::goodFeaturesToTrack(image, corners, n_max, 0.01, config_.tracker.min_dist, mask);
+  CornerOptions corner_options;
+  corner_options.max_corners = n_max;
+  corner_options.quality_level = 0.01;
+  corner_options.min_distance = config_.tracker.min_dist;
+  const std::vector<cv::Point2f> corners = detectCorners(image, mask, corner_options);
   for (const auto& c : corners) {
     Eigen::Vector2d xy;
     if (!inBorder(c) || !cams_[0]->liftToNormalized(toEigen(c), xy)) continue;
@@ -274,7 +278,7 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
 }
 
 void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vector<Feature>& features,
-                                const std::vector<std::size_t>* which) {
+                                const std::vector<std::size_t>* which, const std::vector<PrevObs>* prev_obs) {
   if (!has_right_image_) return;
   std::vector<std::size_t> all;
   if (!which) {
@@ -284,24 +288,56 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
   }
   if (which->empty()) return;
   const cv::Size win(params_.klt_window, params_.klt_window);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations,
+                              params_.klt_epsilon);
   const std::vector<cv::Mat>& right_pyr = right_pyr_;  // built once per frame in track()
-  std::vector<cv::Point2f> pl, pr, back;
-  for (std::size_t j : *which)
-    pl.emplace_back(static_cast<float>(features[j].uv.x()), static_cast<float>(features[j].uv.y()));
-  std::vector<uchar> status, status_back;
+  const std::size_t n = which->size();
+  std::vector<cv::Point2f> pl(n), pr(n), back;
+  std::vector<uchar> status(n, 0), status_back;
   std::vector<float> err;
-  cv::calcOpticalFlowPyrLK(left_pyr, right_pyr, pl, pr, status, err, win, params_.klt_levels);
+  for (std::size_t i = 0; i < n; ++i)
+    pl[i] = cv::Point2f(static_cast<float>(features[(*which)[i]].uv.x()), static_cast<float>(features[(*which)[i]].uv.y()));
+  // A track matched in the previous frame: from its previous disparity, on few levels.
+  std::vector<std::size_t> guided, full;
+  for (std::size_t i = 0; i < n; ++i) {
+    const PrevObs* p = prev_obs ? &(*prev_obs)[(*which)[i]] : nullptr;
+    if (p && p->has_right) {
+      const Eigen::Vector2d guess = features[(*which)[i]].uv + (p->uv_right - p->uv);
+      pr[i] = cv::Point2f(static_cast<float>(guess.x()), static_cast<float>(guess.y()));
+      guided.push_back(i);
+    } else {
+      full.push_back(i);
+    }
+  }
+  auto lk = [&](const std::vector<std::size_t>& idx, int levels, int flags) {
+    if (idx.empty()) return;
+    std::vector<cv::Point2f> a, b;
+    for (std::size_t i : idx) {
+      a.push_back(pl[i]);
+      b.push_back(flags ? pr[i] : pl[i]);
+    }
+    std::vector<uchar> st;
+    cv::calcOpticalFlowPyrLK(left_pyr, right_pyr, a, b, st, err, win, levels, crit, flags);
+    for (std::size_t j = 0; j < idx.size(); ++j) {
+      pr[idx[j]] = b[j];
+      status[idx[j]] = st[j] && inBorder(b[j]);
+    }
+  };
+  lk(guided, params_.klt_stereo_guided_levels, cv::OPTFLOW_USE_INITIAL_FLOW);
+  for (std::size_t i : guided)
+    if (!status[i]) full.push_back(i);  // lost from the guess: search from scratch
+  std::sort(full.begin(), full.end());
+  lk(full, params_.klt_levels, 0);
   if (config_.tracker.flow_back) {
     back = pl;
-    cv::calcOpticalFlowPyrLK(right_pyr, left_pyr, pr, back, status_back, err, win, params_.klt_back_levels,
-                             cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01),
+    cv::calcOpticalFlowPyrLK(right_pyr, left_pyr, pr, back, status_back, err, win, params_.klt_back_levels, crit,
                              cv::OPTFLOW_USE_INITIAL_FLOW);
   }
   const double f = cams_[1]->focal();
-  for (std::size_t i = 0; i < which->size(); ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     Feature& feat = features[(*which)[i]];
     feat.has_right = false;
-    bool ok = status[i] && inBorder(pr[i]);
+    bool ok = status[i] != 0;
     if (ok && config_.tracker.flow_back) ok = status_back[i] && cv::norm(back[i] - pl[i]) <= params_.flow_back_px;
     Eigen::Vector2d xy_r;
     if (!ok || !cams_[1]->liftToNormalized(toEigen(pr[i]), xy_r)) continue;
@@ -392,7 +428,7 @@ void FeatureTracker::filterTracks(FrameWork& w, std::vector<Track>& list, const 
                                   std::vector<Feature>& feats) {
   feats.clear();
   for (const auto& t : list) feats.push_back(featureOf(t));
-  if (prev_obs) matchRight(cur_pyr_, feats);  // tracked: right match now; new corners: after the top-up
+  if (prev_obs) matchRight(cur_pyr_, feats, nullptr, prev_obs);  // tracked: right match now; new corners: after the top-up
   if (!w.filter) return;
   const auto t0 = Clock::now();
   std::vector<FilterItem> items(feats.size());
@@ -486,6 +522,7 @@ void FeatureTracker::matchNewAndFollowed(FeatureFrame& out, std::vector<Track>& 
     auto it = by_id.find(t.id);
     t.has_right = it != by_id.end() && it->second->has_right;
     t.xy_right = t.has_right ? it->second->xy_right : Eigen::Vector2d::Zero();
+    t.uv_right = t.has_right ? it->second->uv_right : Eigen::Vector2d::Zero();
   }
 }
 

@@ -26,6 +26,9 @@ struct TrackerParams {
   /// Pyramid levels of the backward checks: they start at the forward start point, so a
   /// narrow basin suffices (VINS-Fusion uses 1 for its reverse check).
   int klt_back_levels = 1;
+  /// Pyramid levels of the right-image search started from a track's previous disparity
+  /// (the disparity of a static point changes by a fraction of a pixel between frames).
+  int klt_stereo_guided_levels = 2;
   int klt_iterations = 30;     ///< KLT stops after this many iterations ...
   double klt_epsilon = 0.01;   ///< ... or when the update is below this (px)
   double flow_back_px = 0.5;       ///< max forward-backward distance
@@ -88,12 +91,14 @@ class FeatureTracker {
     Eigen::Matrix2d A_patch = Eigen::Matrix2d::Identity();  ///< current affine shape of the patch
     bool has_right = false;                                 ///< right match in this track's frame
     Eigen::Vector2d xy_right = Eigen::Vector2d::Zero();
+    Eigen::Vector2d uv_right = Eigen::Vector2d::Zero();
   };
   /// A track's observation in the previous frame.
   struct PrevObs {
     Eigen::Vector2d uv, xy;
     bool has_right;
     Eigen::Vector2d xy_right;
+    Eigen::Vector2d uv_right;
   };
   /// What one call of track() builds up while it runs.
   struct FrameWork {
@@ -146,9 +151,12 @@ class FeatureTracker {
   std::vector<uchar> hiddenAtPrediction(const std::vector<cv::Mat>& pyr, const std::vector<LostJudged>& judged,
                                         const std::vector<std::size_t>& not_found) const;
   void detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected);
-  /// Matches features[i] for i in `which` (all when null) in the right image.
+  /// Matches features[i] for i in `which` (all when null) in the right image. With
+  /// `prev_obs` (parallel to `features`), a feature matched in the previous frame starts
+  /// from its previous disparity on klt_stereo_guided_levels levels; where that fails,
+  /// and for the others, the search starts at the left position on all levels.
   void matchRight(const std::vector<cv::Mat>& left_pyr, std::vector<Feature>& features,
-                  const std::vector<std::size_t>* which = nullptr);
+                  const std::vector<std::size_t>* which = nullptr, const std::vector<PrevObs>* prev_obs = nullptr);
   bool inBorder(const cv::Point2f& p) const;
 
   Config config_;

@@ -2,7 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
-#include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
@@ -106,28 +106,83 @@ PatchTemplate makePatchTemplate(const cv::Mat& image, const Eigen::Vector2d& uv_
   return tmpl;
 }
 
+namespace {
+
+/// Singular values of a 2x2 matrix, largest first (closed form).
+Eigen::Vector2d singularValues2(const Eigen::Matrix2d& A) {
+  const double e = A.squaredNorm(), d = std::abs(A.determinant());
+  const double root = std::sqrt(std::max(0.0, e * e - 4.0 * d * d));
+  const double s0 = std::sqrt(0.5 * (e + root));
+  return {s0, s0 > 0.0 ? d / s0 : 0.0};
+}
+
+/// The image under the warp at the template's pixels, in float (row-major, n x n);
+/// false when a pixel has no 2x2 neighbourhood. The warped patch is a parallelogram:
+/// inside the image when its four corners are.
+bool warpPatch(const cv::Mat& image, const AffineWarp& warp, int half, std::vector<float>& out) {
+  const int n = 2 * half + 1;
+  const double lim_u = image.cols - 1, lim_v = image.rows - 1;
+  for (const double cx : {-half, half})
+    for (const double cy : {-half, half}) {
+      const Eigen::Vector2d uv = warp.A * Eigen::Vector2d(cx, cy) + warp.t;
+      if (!(uv.x() >= 0.0 && uv.y() >= 0.0 && uv.x() < lim_u && uv.y() < lim_v)) return false;
+    }
+  const double a00 = warp.A(0, 0), a01 = warp.A(0, 1), a10 = warp.A(1, 0), a11 = warp.A(1, 1);
+  const std::size_t step = image.step1();
+  const uchar* data = image.ptr<uchar>();
+  for (int r = 0; r < n; ++r) {
+    const double y = r - half;
+    double u = warp.t.x() + a01 * y - a00 * half, v = warp.t.y() + a11 * y - a10 * half;
+    float* dst = out.data() + static_cast<std::size_t>(r) * n;
+    for (int c = 0; c < n; ++c, u += a00, v += a10) {
+      // The corners bound every pixel, but the running sums may round across the edge.
+      const double uc = std::min(std::max(u, 0.0), lim_u - 1e-9), vc = std::min(std::max(v, 0.0), lim_v - 1e-9);
+      const int x0 = static_cast<int>(uc), y0 = static_cast<int>(vc);
+      const float ax = static_cast<float>(uc - x0), ay = static_cast<float>(vc - y0);
+      const uchar* p0 = data + static_cast<std::size_t>(y0) * step + x0;
+      const uchar* p1 = p0 + step;
+      dst[c] = (1 - ay) * ((1 - ax) * p0[0] + ax * p0[1]) + ay * ((1 - ax) * p1[0] + ax * p1[1]);
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
 AlignResult alignAffine(const PatchTemplate& tmpl, const cv::Mat& image, AffineWarp& warp,
                         const AlignOptions& options) {
   AlignResult res;
   if (!tmpl.valid) return res;
-  const int half = tmpl.half, n = 2 * half + 1;
-  std::vector<float> warped(tmpl.values.size());
+  const int half = tmpl.half;
+  const std::size_t count = tmpl.values.size();
+  std::vector<float> warped(count);
   for (res.iterations = 1; res.iterations <= options.max_iterations; ++res.iterations) {
-    for (int r = 0; r < n; ++r)
-      for (int c = 0; c < n; ++c) {
-        const Eigen::Vector2d uv = warp.A * Eigen::Vector2d(c - half, r - half) + warp.t;
-        if (!sample(image, uv.x(), uv.y(), warped[r * n + c])) return res;
-      }
-    if (!normalize(warped)) return res;
-    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
-    double zncc = 0;
-    for (std::size_t i = 0; i < warped.size(); ++i) {
-      const double e = warped[i] - tmpl.values[i];
-      zncc += static_cast<double>(warped[i]) * tmpl.values[i];
-      for (int k = 0; k < 6; ++k) b[k] += tmpl.sd[6 * i + k] * e;
+    if (!warpPatch(image, warp, half, warped)) return res;
+    // Normalize (zero mean, unit norm), then the error against the template and the
+    // steepest-descent sums, in one pass over the normalized values.
+    float sum = 0.f;
+    for (float x : warped) sum += x;
+    const float mean = sum / static_cast<float>(count);
+    float ss = 0.f;
+    for (float& x : warped) {
+      x -= mean;
+      ss += x * x;
+    }
+    // Below ~1 gray level of standard deviation there is nothing to align.
+    if (ss < static_cast<float>(count)) return res;
+    const float scale = 1.f / std::sqrt(ss);
+    float b[6] = {0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
+    float zncc = 0.f;
+    const float* t = tmpl.values.data();
+    const float* sd = tmpl.sd.data();
+    for (std::size_t i = 0; i < count; ++i, sd += 6) {
+      const float w = warped[i] * scale;
+      const float e = w - t[i];
+      zncc += w * t[i];
+      for (int k = 0; k < 6; ++k) b[k] += sd[k] * e;
     }
     res.zncc = zncc;
-    const Eigen::Matrix<double, 6, 1> dp = tmpl.H_inv * b;
+    const Eigen::Matrix<double, 6, 1> dp = tmpl.H_inv * Eigen::Map<const Eigen::Matrix<float, 6, 1>>(b).cast<double>();
     Eigen::Matrix2d D;
     D << 1.0 + dp[0], dp[1], dp[2], 1.0 + dp[3];
     if (std::abs(D.determinant()) < 1e-6) return res;
@@ -136,7 +191,7 @@ AlignResult alignAffine(const PatchTemplate& tmpl, const cv::Mat& image, AffineW
     const Eigen::Vector2d step = A_new * dp.tail<2>();
     warp.A = A_new;
     warp.t -= step;
-    const Eigen::Vector2d sv = Eigen::JacobiSVD<Eigen::Matrix2d>(warp.A).singularValues();
+    const Eigen::Vector2d sv = singularValues2(warp.A);
     if (!(sv[1] > 1.0 / options.max_scale_change && sv[0] < options.max_scale_change)) return res;
     if (step.norm() < options.epsilon_px) {
       res.converged = true;
