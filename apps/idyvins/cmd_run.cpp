@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "core/error.h"
 #include "eval/trajectory_metrics.h"
+#include "io/bag_dataset.h"
 #include "io/config.h"
 #include "io/data_source.h"
 #include "io/ply.h"
@@ -24,7 +25,7 @@ namespace idyvins::app {
 namespace {
 
 struct RunArgs {
-  std::string config, dataset, out, mode, dump_observations;
+  std::string config, dataset, out, mode, dump_observations, groundtruth_topic;
   std::size_t max_frames = 0;
   bool solver_time_limit = false;
   int threads = 2, feedback_delay = -1;
@@ -43,12 +44,23 @@ class ProgressObserver final : public pipeline::FrameObserver {
 
 /// The opened dataset and what it offers.
 struct Input {
-  std::unique_ptr<io::EurocSource> source;
+  std::unique_ptr<io::DataSource> source;
   std::vector<StampedPose> groundtruth;
   bool has_masks = false;
 };
 
-Input openInput(const std::string& dataset, const Config& config) {
+Input openInput(const std::string& dataset, const Config& config, const std::string& groundtruth_topic) {
+  if (io::isBagFile(dataset)) {
+    io::BagIndex index = io::indexBag(dataset, io::bagTopics(config, groundtruth_topic), config.image_width,
+                                      config.image_height);
+    if (config.dynamic.mode == Mode::kSeg)
+      throw InputError(dataset, "mode seg needs ground-truth masks, which idyvins does not read from bags yet "
+                                "(convert the bag to a EuRoC folder with masks)");
+    Input in;
+    for (const auto& g : index.dataset.groundtruth) in.groundtruth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
+    in.source = std::make_unique<io::BagSource>(std::move(index), config.image_width, config.image_height);
+    return in;
+  }
   io::EurocDataset ds = io::readEurocDataset(dataset);
   Input in;
   for (const auto& g : ds.groundtruth) in.groundtruth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
@@ -196,7 +208,7 @@ int runRun(const RunArgs& a) {
   if (run.pipelined && run.feedback_delay != 1)
     throw CLI::ValidationError("--feedback-delay", "a pipelined run (--threads 2) has a feedback delay of 1 frame");
   pipeline::System system(config, run);
-  Input in = openInput(a.dataset, config);
+  Input in = openInput(a.dataset, config, a.groundtruth_topic);
   std::error_code ec;
   std::filesystem::create_directories(a.out, ec);
   if (ec) throw InputError(a.out, "cannot create output folder: " + ec.message());
@@ -243,8 +255,14 @@ void registerRun(CLI::App& app, int& exit_code) {
       "solve stops on max_num_iterations or convergence, never on the clock, so the same input\n"
       "and config give the same outputs whatever the machine's load (timing fields aside).");
   cmd->add_option("-c,--config", a->config, "VINS-Fusion config")->required();
-  cmd->add_option("-d,--dataset", a->dataset, "EuRoC folder")->required();
+  cmd->add_option("-d,--dataset", a->dataset,
+                  "EuRoC folder or ROS1 bag (topics from the config's imu_topic, image0_topic, image1_topic)")
+      ->required();
   cmd->add_option("-o,--out", a->out, "output folder")->required();
+  cmd->add_option("--groundtruth-topic", a->groundtruth_topic,
+                  "bag only: ground-truth topic (nav_msgs/Odometry, geometry_msgs/TransformStamped, PoseStamped or\n"
+                  "PointStamped), e.g. /odometry (VIODE), /vicon/firefly_sbx/firefly_sbx or /leica/position (EuRoC);\n"
+                  "overrides the config's groundtruth_topic");
   cmd->add_option("--mode", a->mode, "overrides the config's mode: " + modeNames());
   cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)");
   cmd->add_option("--threads", a->threads,

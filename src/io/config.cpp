@@ -292,6 +292,11 @@ Config loadConfig(const std::string& path) {
   c.td_s = getDoubleOr(f, "td", 0.0);
 
   readDynamic(f, path, c);
+  for (auto [key, value] : {std::pair<const char*, std::string*>{"imu_topic", &c.imu_topic},
+                            {"image0_topic", &c.image0_topic},
+                            {"image1_topic", &c.image1_topic},
+                            {"groundtruth_topic", &c.groundtruth_topic}})
+    if (f.root[key]) *value = getString(f, f.root, key, "a ROS topic name");
   return c;
 }
 

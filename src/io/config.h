@@ -97,6 +97,10 @@ struct Config {
   bool estimate_td = false;
   double td_s = 0.0;  ///< image clock + td = IMU clock, seconds
   DynamicOptions dynamic;
+  /// Bag topics (VINS-Fusion's keys imu_topic, image0_topic, image1_topic; idyvins'
+  /// groundtruth_topic, empty = none). Used when the dataset is a ROS1 bag.
+  std::string imu_topic = "/imu0", image0_topic = "/cam0/image_raw", image1_topic = "/cam1/image_raw";
+  std::string groundtruth_topic;
 };
 
 /// Reads a camodocal camera file (PINHOLE or KANNALA_BRANDT). Throws InputError.

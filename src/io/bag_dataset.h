@@ -1,0 +1,89 @@
+#pragma once
+// ROS1 bag files as datasets (DESIGN §2: one time-ordered stream, wherever the
+// data comes from). Reading and deserialization are Debian's rosbag_storage and
+// the ROS message definitions; no ROS installation, master or environment. This
+// header does not include ROS headers.
+//
+// A bag is indexed once (IMU samples, ground truth and the header stamps of every
+// image are kept; image pixels are not), then streamed: images are decoded as the
+// frames are consumed, so memory stays bounded by a few frames whatever the bag's size.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "io/config.h"
+#include "io/data_source.h"
+#include "io/euroc_dataset.h"
+
+namespace idyvins::io {
+
+/// Topics to read (VINS-Fusion's config keys imu_topic, image0_topic, image1_topic;
+/// groundtruth_topic is idyvins' own). Empty image1: monocular; empty groundtruth:
+/// none. Ground truth may be nav_msgs/Odometry (VIODE: /odometry),
+/// geometry_msgs/TransformStamped or PoseStamped (EuRoC Vicon rooms:
+/// /vicon/firefly_sbx/firefly_sbx) or PointStamped (EuRoC Leica: /leica/position,
+/// position only, identity orientation).
+struct BagTopics {
+  std::string imu = "/imu0";
+  std::string image0 = "/cam0/image_raw";
+  std::string image1 = "/cam1/image_raw";
+  std::string groundtruth;
+};
+
+/// The topics a config names (image1 only with two cameras); a non-empty
+/// `groundtruth_topic` overrides the config's.
+BagTopics bagTopics(const Config& config, const std::string& groundtruth_topic = "");
+
+/// One topic of a bag, as its index lists it.
+struct BagTopicInfo {
+  std::string topic, type;
+  std::size_t count = 0;
+};
+
+/// A bag's index: every topic, and the streams of `topics` in the EuRoC dataset's
+/// form (image records carry the message's header stamp; `path` names the bag and
+/// topic, `csv_line` the message's position on its topic, 1-based).
+struct BagIndex {
+  std::string path;
+  BagTopics topics;
+  std::vector<BagTopicInfo> all_topics;
+  EurocDataset dataset;
+};
+
+/// True when `path` names a bag file (a regular file whose first bytes are the
+/// ROS bag 2.0 magic), false for folders and other files.
+bool isBagFile(const std::string& path);
+
+/// Indexes a bag: IMU (sensor_msgs/Imu), images (sensor_msgs/Image or
+/// CompressedImage) and ground truth are read and validated (stamps strictly
+/// increasing per topic, topics present with a supported type, encodings supported,
+/// image sizes equal to expected_width x expected_height when those are > 0); stereo
+/// pairs are formed by header stamp as for EuRoC folders. Throws InputError with
+/// one clear line: a truncated or unindexed bag (`rosbag reindex`), a missing topic
+/// (with the image and IMU topics the bag has), an unsupported message type or
+/// encoding, a size mismatch, stamps going backwards, an empty bag.
+BagIndex indexBag(const std::string& path, const BagTopics& topics, int expected_width = 0,
+                  int expected_height = 0, const EurocOptions& options = {});
+
+/// Streams an indexed bag: IMU samples and stereo frames in time order, as
+/// EurocSource does for folders. Images are converted to 8-bit gray as OpenCV does
+/// (cv::cvtColor for rgb8, bgr8, rgba8, bgra8; cv::imdecode for png and jpeg).
+class BagSource : public DataSource {
+ public:
+  BagSource(BagIndex index, int expected_width, int expected_height);
+  ~BagSource() override;
+  std::optional<Measurement> next() override;
+  std::size_t frameCount() const override { return index_.dataset.pairs.size(); }
+  const BagIndex& index() const { return index_; }
+
+ private:
+  struct Reader;  // the open bag and its view (ROS types stay in the .cpp)
+  bool nextPairImages(cv::Mat& left, cv::Mat& right);
+  BagIndex index_;
+  int width_, height_;
+  std::unique_ptr<Reader> reader_;
+  std::size_t next_imu_ = 0, next_pair_ = 0;
+};
+
+}  // namespace idyvins::io
