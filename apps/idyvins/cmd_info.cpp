@@ -8,6 +8,7 @@
 
 #include "commands.h"
 #include "core/error.h"
+#include "io/bag_dataset.h"
 #include "io/config.h"
 #include "io/dataset_summary.h"
 #include "io/euroc_dataset.h"
@@ -19,6 +20,7 @@ namespace {
 struct InfoArgs {
   std::string dataset;
   std::string config;
+  std::string groundtruth_topic;
   bool json = false;
   bool skip_images = false;
 };
@@ -57,16 +59,46 @@ std::pair<int, int> validateImages(const io::EurocDataset& ds, int width, int he
   return {width, height};
 }
 
+/// Decodes every image of every stereo pair of a bag; returns the image size.
+std::pair<int, int> validateBagImages(io::BagIndex index, int width, int height) {
+  const std::size_t total = index.dataset.pairs.size();
+  io::BagSource source(std::move(index), width, height);
+  ProgressBar bar("checking images", total, "pairs");
+  std::size_t k = 0;
+  std::pair<int, int> size{width, height};
+  while (auto m = source.next()) {
+    if (const auto* f = std::get_if<StereoFrame>(&*m)) {
+      size = {f->left.cols, f->left.rows};
+      bar.update(++k);
+    }
+  }
+  bar.finish();
+  return size;
+}
+
+/// Default topics for a bag without a config: VIODE's and EuRoC's names.
+io::BagTopics defaultBagTopics(const std::optional<Config>& config, const std::string& groundtruth_topic) {
+  if (config) return io::bagTopics(*config, groundtruth_topic);
+  io::BagTopics t;
+  t.groundtruth = groundtruth_topic;
+  return t;
+}
+
 int runInfo(const InfoArgs& args) {
   std::optional<Config> config;
   if (!args.config.empty()) config = loadConfig(args.config);
-  const io::EurocDataset ds = io::readEurocDataset(args.dataset);
+  std::optional<io::BagIndex> bag;
+  if (io::isBagFile(args.dataset))
+    bag = io::indexBag(args.dataset, defaultBagTopics(config, args.groundtruth_topic),
+                       config ? config->image_width : 0, config ? config->image_height : 0);
+  const io::EurocDataset ds = bag ? bag->dataset : io::readEurocDataset(args.dataset);
   const io::DatasetSummary s = io::summarize(ds);
   if (config && config->num_cam == 2 && !ds.stereo())
     throw InputError(ds.root, "config asks for 2 cameras but the dataset has no cam1/");
   std::pair<int, int> size{0, 0};
   if (!args.skip_images)
-    size = validateImages(ds, config ? config->image_width : 0, config ? config->image_height : 0);
+    size = bag ? validateBagImages(*bag, config ? config->image_width : 0, config ? config->image_height : 0)
+               : validateImages(ds, config ? config->image_width : 0, config ? config->image_height : 0);
 
   if (args.json) {
     nlohmann::json j = {{"dataset", ds.root},
@@ -83,10 +115,22 @@ int runInfo(const InfoArgs& args) {
                         {"image_width", size.first},
                         {"image_height", size.second},
                         {"config", config ? config->path : ""}};
+    if (bag) {
+      j["format"] = "rosbag";
+      j["topics"] = nlohmann::json::array();
+      for (const auto& t : bag->all_topics) j["topics"].push_back({{"topic", t.topic}, {"type", t.type}, {"count", t.count}});
+    }
     std::cout << j.dump(2) << "\n";
     return kOk;
   }
-  std::printf("dataset: %s (EuRoC ASL, %s)\n", ds.root.c_str(), s.stereo ? "stereo" : "mono");
+  std::printf("dataset: %s (%s, %s)\n", ds.root.c_str(), bag ? "ROS1 bag" : "EuRoC ASL", s.stereo ? "stereo" : "mono");
+  if (bag) {
+    for (const auto& t : bag->all_topics)
+      std::printf("  topic        %-40s %-32s %7zu messages\n", t.topic.c_str(), t.type.c_str(), t.count);
+    std::printf("  reading      imu %s, cam0 %s, cam1 %s, groundtruth %s\n", bag->topics.imu.c_str(),
+                bag->topics.image0.c_str(), bag->topics.image1.empty() ? "-" : bag->topics.image1.c_str(),
+                bag->topics.groundtruth.empty() ? "-" : bag->topics.groundtruth.c_str());
+  }
   printStream("imu0", s.imu, "samples");
   printStream("cam0", s.cam0, "images");
   if (s.stereo) printStream("cam1", s.cam1, "images");
@@ -99,6 +143,7 @@ int runInfo(const InfoArgs& args) {
     std::printf("; not used\n");
   }
   if (s.has_groundtruth) printStream("groundtruth", s.groundtruth, "states");
+  else if (bag) std::printf("  groundtruth  none (no --groundtruth-topic, no groundtruth_topic in the config)\n");
   else std::printf("  groundtruth  none (no state_groundtruth_estimate0/data.csv)\n");
   std::printf("  imu coverage %.3f s before the first frame, %.3f s after the last\n",
               s.imu_before_first_frame_s, s.imu_after_last_frame_s);
@@ -118,11 +163,14 @@ void registerInfo(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<InfoArgs>();
   CLI::App* cmd = app.add_subcommand(
       "info",
-      "Print what a EuRoC ASL dataset holds (counts, rates, time span, gaps, unmatched\n"
-      "stereo rows, calibration) and validate it: CSV syntax, time order, every image\n"
-      "readable and of the config's size. Exits 1 with file:line: reason on bad input.");
-  cmd->add_option("dataset", args->dataset, "EuRoC folder (holding mav0/) or the mav0 folder")
+      "Print what a EuRoC ASL dataset or a ROS1 bag holds (counts, rates, time span, gaps,\n"
+      "unmatched stereo rows, calibration; for a bag also every topic with its type and count)\n"
+      "and validate it: syntax, time order, every image readable and of the config's size.\n"
+      "Exits 1 with file:line: reason on bad input.");
+  cmd->add_option("dataset", args->dataset, "EuRoC folder (holding mav0/), the mav0 folder, or a ROS1 bag")
       ->required();
+  cmd->add_option("--groundtruth-topic", args->groundtruth_topic,
+                  "bag only: ground-truth topic, e.g. /odometry (VIODE) or /vicon/firefly_sbx/firefly_sbx (EuRoC)");
   cmd->add_option("-c,--config", args->config,
                   "VINS-Fusion config to validate against (image size, camera count)");
   cmd->add_flag("--json", args->json, "print the summary as JSON");

@@ -1,0 +1,164 @@
+#!/usr/bin/python3
+"""ROS1 bags against EuRoC folders, through the idyvins command (CTest).
+
+bag_check.py setup IDYVINS WORK   simulate a short sequence, write bags of it with python3-rosbag
+bag_check.py run IDYVINS WORK     run on the folder and on each bag: byte-identical trajectories, same ATE
+bag_check.py info IDYVINS WORK    info on the folder and on a bag: same counts, rates and gaps
+bag_check.py bad IDYVINS WORK     bad bags and configs: exit code 1 and one clear line each
+"""
+import filecmp
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+MAKE_BAG = os.path.join(HERE, "make_test_bag.py")
+# (file, compression, encoding, ground truth kind, its topic)
+VARIANTS = [
+    ("plain_mono8_odometry.bag", "none", "mono8", "odometry", "/odometry"),
+    ("bz2_bgr8_transform.bag", "bz2", "bgr8", "transform", "/vicon/firefly_sbx/firefly_sbx"),
+    ("lz4_rgb8_pose.bag", "lz4", "rgb8", "pose", "/pose"),
+    ("lz4_png_point.bag", "lz4", "png", "point", "/leica/position"),
+]
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what)
+    if not cond:
+        failures.append(what)
+
+
+def sh(cmd):
+    return subprocess.run(cmd, capture_output=True, text=True)
+
+
+def config(work):
+    return os.path.join(work, "seq", "config", "sim_stereo_imu_config.yaml")
+
+
+def setup(idy, work):
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    r = sh([idy, "simulate", "--scene", "city", "--level", "high", "--seed", "1", "--duration", "4", "--out",
+            os.path.join(work, "seq")])
+    check(r.returncode == 0, "simulate: " + r.stderr.strip()[-200:])
+    for name, comp, enc, gt, _ in VARIANTS:
+        r = sh(["/usr/bin/python3", MAKE_BAG, os.path.join(work, "seq"), os.path.join(work, name), "--compression",
+                comp, "--encoding", enc, "--groundtruth", gt])
+        check(r.returncode == 0, "write %s %s" % (name, r.stderr.strip()[-300:]))
+    for c in ["truncate", "unindex", "backwards", "encoding", "empty"]:
+        r = sh(["/usr/bin/python3", MAKE_BAG, os.path.join(work, "seq"), os.path.join(work, "bad_%s.bag" % c),
+                "--frames", "12", "--corrupt", c])
+        check(r.returncode == 0, "write bad_%s.bag %s" % (c, r.stderr.strip()[-300:]))
+
+
+def run(idy, work, dataset, out, extra=(), cfg=None):
+    r = sh([idy, "run", "-c", cfg or config(work), "-d", dataset, "-o", out, "--mode", "idy", "--threads", "1"] + list(extra))
+    return r, (json.load(open(os.path.join(out, "stats.json")))["summary"] if r.returncode == 0 else None)
+
+
+def test_run(idy, work):
+    ref_out = os.path.join(work, "out_folder")
+    r, ref = run(idy, work, os.path.join(work, "seq"), ref_out)
+    check(r.returncode == 0 and ref is not None and "ate_rmse_m" in ref, "run on the folder")
+    for name, _, _, _, topic in VARIANTS:
+        out = os.path.join(work, "out_" + name)
+        cfg = None
+        if "png" in name:  # image_transport's names for compressed images
+            cfg = edited_config(work, "compressed", r"^image0_topic:.*$", 'image0_topic: "/cam0/image_raw/compressed"')
+            edit(cfg, r"^image1_topic:.*$", 'image1_topic: "/cam1/image_raw/compressed"')
+        r, s = run(idy, work, os.path.join(work, name), out, ["--groundtruth-topic", topic], cfg)
+        check(r.returncode == 0, "run on %s: %s" % (name, r.stderr.strip()[-300:]))
+        if r.returncode != 0:
+            continue
+        for f in ["trajectory.tum", "trajectory.csv", "state.csv", "map_static.ply", "map_dynamic.ply"]:
+            check(filecmp.cmp(os.path.join(ref_out, f), os.path.join(out, f), shallow=False),
+                  "%s: %s byte-identical to the folder's" % (name, f))
+        check(s.get("ate_rmse_m") == ref["ate_rmse_m"], "%s: ATE %s == folder's %s" % (
+            name, s.get("ate_rmse_m"), ref["ate_rmse_m"]))
+
+
+def info_json(idy, args):
+    r = sh([idy, "info", "--json"] + args)
+    return r, (json.loads(r.stdout) if r.returncode == 0 else None)
+
+
+def test_info(idy, work):
+    r, folder = info_json(idy, [os.path.join(work, "seq")])
+    check(r.returncode == 0, "info on the folder")
+    for name, _, _, _, topic in VARIANTS[:2]:
+        r, bag = info_json(idy, [os.path.join(work, name), "--groundtruth-topic", topic, "-c", config(work)])
+        check(r.returncode == 0, "info on %s: %s" % (name, r.stderr.strip()[-300:]))
+        if r.returncode != 0:
+            continue
+        for stream in ["imu", "cam0", "cam1", "stereo_pairs", "groundtruth"]:
+            check(bag[stream] == folder[stream], "%s: %s stats equal the folder's" % (name, stream))
+        for k in ["unmatched_cam0", "unmatched_cam1", "image_width", "image_height"]:
+            check(bag[k] == folder[k], "%s: %s equal" % (name, k))
+        topics = {t["topic"]: (t["type"], t["count"]) for t in bag["topics"]}
+        check(topics.get("/imu0") == ("sensor_msgs/Imu", folder["imu"]["count"]), "%s: /imu0 listed" % name)
+        check(topics.get("/cam0/image_raw") == ("sensor_msgs/Image", folder["cam0"]["count"]),
+              "%s: /cam0/image_raw listed" % name)
+
+
+def edit(path, pattern, replacement):
+    """Replaces the line matching `pattern` (or appends `replacement`)."""
+    text = open(path).read()
+    if re.search(pattern, text, flags=re.M):
+        text = re.sub(pattern, replacement, text, flags=re.M)
+    else:
+        text += "\n" + replacement + "\n"
+    open(path, "w").write(text)
+
+
+def edited_config(work, name, pattern, replacement, all_files=False):
+    """A copy of the sequence's config folder with one edit (in every YAML file with all_files)."""
+    src = os.path.dirname(config(work))
+    dst = os.path.join(work, "config_" + name)
+    shutil.rmtree(dst, ignore_errors=True)
+    shutil.copytree(src, dst)
+    path = os.path.join(dst, os.path.basename(config(work)))
+    for f in sorted(os.listdir(dst)) if all_files else [os.path.basename(path)]:
+        if f.endswith(".yaml"):
+            edit(os.path.join(dst, f), pattern, replacement)
+    return path
+
+
+def test_bad(idy, work):
+    cases = [
+        ("bad_truncate.bag", None, "truncated"),
+        ("bad_unindex.bag", None, "rosbag reindex"),
+        ("bad_backwards.bag", None, "topic '/imu0' message 51"),
+        ("bad_encoding.bag", None, "unsupported image encoding 'yuv422'"),
+        ("bad_empty.bag", None, "holds no messages"),
+        ("plain_mono8_odometry.bag", edited_config(work, "topic", r"^image0_topic:.*$", 'image0_topic: "/cam0/missing"'),
+         "topic '/cam0/missing' (config key image0_topic) is not in the bag; its image topics: /cam0/image_raw"),
+        ("plain_mono8_odometry.bag", edited_config(work, "size", r"^image_width:.*$", "image_width: 640", True),
+         "image is 752x480, the config says 640x480"),
+        ("plain_mono8_odometry.bag", None, "topic '/nothing' (config key groundtruth_topic) is not in the bag"),
+    ]
+    for i, (bag, cfg, expected) in enumerate(cases):
+        args = [idy, "run", "-c", cfg or config(work), "-d", os.path.join(work, bag), "-o",
+                os.path.join(work, "out_bad%d" % i)]
+        if i == len(cases) - 1:
+            args += ["--groundtruth-topic", "/nothing"]
+        r = sh(args)
+        lines = [l for l in r.stderr.splitlines() if l.strip()]
+        check(r.returncode == 1, "%s: exit code %d (1 expected)" % (bag, r.returncode))
+        check(len(lines) == 1 and lines[0].startswith("error: ") and expected in lines[0],
+              "%s: one clear line containing '%s', got %r" % (bag, expected, lines))
+
+
+def main():
+    cmd, idy, work = sys.argv[1], sys.argv[2], sys.argv[3]
+    {"setup": setup, "run": test_run, "info": test_info, "bad": test_bad}[cmd](idy, work)
+    print("%d failure(s)" % len(failures))
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
