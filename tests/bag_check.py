@@ -2,7 +2,8 @@
 """ROS1 bags against EuRoC folders, through the idyvins command (CTest).
 
 bag_check.py setup IDYVINS WORK   simulate a short sequence, write bags of it with python3-rosbag
-bag_check.py run IDYVINS WORK     run on the folder and on each bag: byte-identical trajectories, same ATE
+bag_check.py run IDYVINS WORK     run on the folder, on each bag and on a converted bag: byte-identical
+                                  outputs, same ATE
 bag_check.py info IDYVINS WORK    info on the folder and on a bag: same counts, rates and gaps
 bag_check.py bad IDYVINS WORK     bad bags and configs: exit code 1 and one clear line each
 """
@@ -80,6 +81,17 @@ def test_run(idy, work):
                   "%s: %s byte-identical to the folder's" % (name, f))
         check(s.get("ate_rmse_m") == ref["ate_rmse_m"], "%s: ATE %s == folder's %s" % (
             name, s.get("ate_rmse_m"), ref["ate_rmse_m"]))
+    # convert, then run on the folder it wrote: identical again.
+    conv = os.path.join(work, "converted")
+    shutil.rmtree(conv, ignore_errors=True)
+    r = sh([idy, "convert", os.path.join(work, VARIANTS[1][0]), conv, "-c", config(work), "--groundtruth-topic",
+            VARIANTS[1][4]])
+    check(r.returncode == 0, "convert %s: %s" % (VARIANTS[1][0], r.stderr.strip()[-300:]))
+    r, s = run(idy, work, conv, os.path.join(work, "out_converted"))
+    check(r.returncode == 0 and filecmp.cmp(os.path.join(ref_out, "trajectory.tum"),
+                                            os.path.join(work, "out_converted", "trajectory.tum"), shallow=False),
+          "convert then run: trajectory byte-identical to the original folder's")
+    check(s is not None and s.get("ate_rmse_m") == ref["ate_rmse_m"], "convert then run: same ATE")
 
 
 def info_json(idy, args):

@@ -24,6 +24,9 @@ void registerTrack(CLI::App& app, int& exit_code);
 /// `idyvins run --config CFG --dataset DIR --out OUT [--mode ...]`.
 void registerRun(CLI::App& app, int& exit_code);
 
+/// `idyvins convert BAG OUT [--config CFG] [--groundtruth-topic T]`.
+void registerConvert(CLI::App& app, int& exit_code);
+
 /// `idyvins bench --suite standard --out DIR [--seeds 1,2,3] [--ablations]`.
 void registerBench(CLI::App& app, int& exit_code);
 

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   registerEval(app, exit_code);
   registerTrack(app, exit_code);
   registerRun(app, exit_code);
+  registerConvert(app, exit_code);
   registerBench(app, exit_code);
   try {
     app.parse(argc, argv);
