@@ -4,6 +4,7 @@
 bag_check.py setup IDYVINS WORK   simulate a short sequence, write bags of it with python3-rosbag
 bag_check.py run IDYVINS WORK     run on the folder, on each bag and on a converted bag: byte-identical
                                   outputs, same ATE
+bag_check.py seg IDYVINS WORK     masks from a segmentation topic: seg and idy identical to the folder's
 bag_check.py info IDYVINS WORK    info on the folder and on a bag: same counts, rates and gaps
 bag_check.py bad IDYVINS WORK     bad bags and configs: exit code 1 and one clear line each
 """
@@ -24,6 +25,7 @@ VARIANTS = [
     ("lz4_rgb8_pose.bag", "lz4", "rgb8", "pose", "/pose"),
     ("lz4_png_point.bag", "lz4", "png", "point", "/leica/position"),
 ]
+SEG_BAG = "viode_like_segmentation.bag"
 failures = []
 
 
@@ -51,6 +53,9 @@ def setup(idy, work):
         r = sh(["/usr/bin/python3", MAKE_BAG, os.path.join(work, "seq"), os.path.join(work, name), "--compression",
                 comp, "--encoding", enc, "--groundtruth", gt])
         check(r.returncode == 0, "write %s %s" % (name, r.stderr.strip()[-300:]))
+    r = sh(["/usr/bin/python3", MAKE_BAG, os.path.join(work, "seq"), os.path.join(work, SEG_BAG), "--compression",
+            "lz4", "--segmentation"])
+    check(r.returncode == 0, "write %s %s" % (SEG_BAG, r.stderr.strip()[-300:]))
     for c in ["truncate", "unindex", "backwards", "encoding", "empty"]:
         r = sh(["/usr/bin/python3", MAKE_BAG, os.path.join(work, "seq"), os.path.join(work, "bad_%s.bag" % c),
                 "--frames", "12", "--corrupt", c])
@@ -92,6 +97,30 @@ def test_run(idy, work):
                                             os.path.join(work, "out_converted", "trajectory.tum"), shallow=False),
           "convert then run: trajectory byte-identical to the original folder's")
     check(s is not None and s.get("ate_rmse_m") == ref["ate_rmse_m"], "convert then run: same ATE")
+
+
+def test_seg(idy, work):
+    """Masks from a VIODE-style segmentation topic: seg and idy as on the folder's masks."""
+    bag = os.path.join(work, SEG_BAG)
+    cfg = edited_config(work, "segmentation", r"^segmentation_topic:.*$", 'segmentation_topic: "/cam0/segmentation"')
+    edit(cfg, r"^segmentation_rgb_ids:.*$", "segmentation_rgb_ids: " + bag + ".rgb_ids.txt")
+    edit(cfg, r"^segmentation_vehicle_ids:.*$", "segmentation_vehicle_ids: " + bag + ".vehicle_ids.txt")
+    for mode in ["seg", "idy"]:
+        outs = []
+        for name, dataset, c in [("folder", os.path.join(work, "seq"), config(work)), ("bag", bag, cfg)]:
+            out = os.path.join(work, "out_%s_%s" % (mode, name))
+            r = sh([idy, "run", "-c", c, "-d", dataset, "-o", out, "--mode", mode, "--threads", "1",
+                    "--groundtruth-topic", "/odometry"] if name == "bag" else
+                   [idy, "run", "-c", c, "-d", dataset, "-o", out, "--mode", mode, "--threads", "1"])
+            check(r.returncode == 0, "%s on the %s: %s" % (mode, name, r.stderr.strip()[-300:]))
+            outs.append(out)
+        if not all(os.path.exists(os.path.join(o, "stats.json")) for o in outs):
+            continue
+        a, b = [json.load(open(os.path.join(o, "stats.json")))["summary"] for o in outs]
+        check(filecmp.cmp(os.path.join(outs[0], "trajectory.tum"), os.path.join(outs[1], "trajectory.tum"),
+                          shallow=False), "%s: trajectory byte-identical between bag and folder" % mode)
+        check(a["classification"] is not None and a["classification"] == b["classification"],
+              "%s: classification figures identical (%s)" % (mode, json.dumps(b["classification"])[:120]))
 
 
 def info_json(idy, args):
@@ -167,7 +196,7 @@ def test_bad(idy, work):
 
 def main():
     cmd, idy, work = sys.argv[1], sys.argv[2], sys.argv[3]
-    {"setup": setup, "run": test_run, "info": test_info, "bad": test_bad}[cmd](idy, work)
+    {"setup": setup, "run": test_run, "seg": test_seg, "info": test_info, "bad": test_bad}[cmd](idy, work)
     print("%d failure(s)" % len(failures))
     return 1 if failures else 0
 

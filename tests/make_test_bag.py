@@ -97,6 +97,9 @@ def main():
     ap.add_argument("--encoding", default="mono8", choices=["mono8", "bgr8", "rgb8", "png"])
     ap.add_argument("--groundtruth", default="odometry", choices=list(GT_TOPICS) + ["none"])
     ap.add_argument("--frames", type=int, default=0)
+    ap.add_argument("--segmentation", action="store_true",
+                    help="also /cam0/segmentation (rgb8) from mav0/cam0/mask, coloured with a table written as "
+                         "OUT.rgb_ids.txt / OUT.vehicle_ids.txt in VIODE's formats (mask id k -> vehicle_dynamic_k-1)")
     ap.add_argument("--corrupt", default="", choices=["", "truncate", "unindex", "backwards", "encoding", "empty"])
     a = ap.parse_args()
     mav0 = os.path.join(a.euroc, "mav0")
@@ -113,6 +116,25 @@ def main():
                 enc = "yuv422" if (a.corrupt == "encoding" and cam == "cam0" and k == 3) else a.encoding
                 m = image_msg(os.path.join(mav0, cam, "data", r[1]), stamp(r[0]), enc)
                 msgs.append((int(r[0]), "/%s/image_raw%s" % (cam, suffix), m))
+        if a.segmentation:
+            colours = np.array([[k, 255 - k, 17] for k in range(256)], dtype=np.uint8)
+            with open(a.out + ".rgb_ids.txt", "w") as f:
+                f.write("id,r,g,b\n")
+                for k in range(256):
+                    f.write("%d,%d,%d,%d\n" % (k, *colours[k]))
+            with open(a.out + ".vehicle_ids.txt", "w") as f:
+                f.write("id, name\n")
+                for k in range(1, 256):
+                    f.write("%d, vehicle_dynamic_%d\n" % (k, k - 1))
+            for r in cams["cam0"]:
+                ids = np.array(PilImage.open(os.path.join(mav0, "cam0", "mask", r[1])))
+                m = Image()
+                m.header.stamp = stamp(r[0])
+                m.height, m.width = ids.shape
+                m.encoding = "rgb8"
+                m.step = 3 * m.width
+                m.data = colours[ids].tobytes()
+                msgs.append((int(r[0]), "/cam0/segmentation", m))
         t_end = int(cams["cam0"][-1][0])
         imu_rows = [r for r in rows(os.path.join(mav0, "imu0", "data.csv")) if int(r[0]) <= t_end + 10_000_000]
         for k, r in enumerate(imu_rows):

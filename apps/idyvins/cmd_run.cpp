@@ -53,12 +53,17 @@ Input openInput(const std::string& dataset, const Config& config, const std::str
   if (io::isBagFile(dataset)) {
     io::BagIndex index = io::indexBag(dataset, io::bagTopics(config, groundtruth_topic), config.image_width,
                                       config.image_height);
-    if (config.dynamic.mode == Mode::kSeg)
-      throw InputError(dataset, "mode seg needs ground-truth masks, which idyvins does not read from bags yet "
-                                "(convert the bag to a EuRoC folder with masks)");
     Input in;
+    in.has_masks = !index.segmentation.empty();
+    if (config.dynamic.mode == Mode::kSeg && !in.has_masks)
+      throw InputError(dataset, "mode seg needs ground-truth masks: a segmentation_topic in the config (VIODE: "
+                                "/cam0/segmentation)");
+    std::optional<io::SegmentationColors> colors;
+    if (in.has_masks)
+      colors = io::readSegmentationColors(config.segmentation_rgb_ids, config.segmentation_vehicle_ids);
     for (const auto& g : index.dataset.groundtruth) in.groundtruth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
-    in.source = std::make_unique<io::BagSource>(std::move(index), config.image_width, config.image_height);
+    in.source =
+        std::make_unique<io::BagSource>(std::move(index), config.image_width, config.image_height, std::move(colors));
     return in;
   }
   io::EurocDataset ds = io::readEurocDataset(dataset);

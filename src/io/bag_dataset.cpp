@@ -184,6 +184,36 @@ std::vector<ImageRecord> indexImages(const rosbag::Bag& bag, const std::string& 
   return records;
 }
 
+/// Header stamps of the segmentation topic (strictly increasing).
+std::vector<ImageRecord> indexSegmentation(const rosbag::Bag& bag, const std::string& path, const std::string& topic,
+                                           const std::string& type) {
+  std::vector<ImageRecord> records;
+  rosbag::View view(bag, rosbag::TopicQuery(topic));
+  TimeNs prev = 0;
+  for (const rosbag::MessageInstance& m : view) {
+    const std::size_t ordinal = records.size() + 1;
+    TimeNs t = 0;
+    if (type == kImage) {
+      const auto img = m.instantiate<sensor_msgs::Image>();
+      if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+      t = stampNs(img->header.stamp);
+    } else {
+      const auto img = m.instantiate<sensor_msgs::CompressedImage>();
+      if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+      t = stampNs(img->header.stamp);
+    }
+    checkIncreasing(path, topic, ordinal, prev, t);
+    prev = t;
+    ImageRecord r;
+    r.t_ns = t;
+    r.path = path + ":" + topic;
+    r.csv_line = static_cast<int>(ordinal);
+    r.exists = true;
+    records.push_back(std::move(r));
+  }
+  return records;
+}
+
 std::vector<ImuSample> indexImu(const rosbag::Bag& bag, const std::string& path, const std::string& topic) {
   std::vector<ImuSample> imu;
   rosbag::View view(bag, rosbag::TopicQuery(topic));
@@ -254,7 +284,116 @@ std::vector<GroundTruthState> indexGroundTruth(const rosbag::Bag& bag, const std
   return gt;
 }
 
+/// A segmentation image as CV_8UC3 in RGB order.
+cv::Mat toRgb(const rosbag::MessageInstance& m, const std::string& type, const std::string& path,
+              const std::string& topic, std::size_t ordinal) {
+  cv::Mat rgb;
+  if (type == kImage) {
+    const auto img = m.instantiate<sensor_msgs::Image>();
+    if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+    const int ch = channelsOf(img->encoding);
+    if (ch < 3)
+      throw InputError(path, where(topic, ordinal) + ": segmentation encoding '" + img->encoding +
+                                 "' is not a colour one (rgb8, bgr8, rgba8, bgra8)");
+    if (img->step < img->width * static_cast<std::uint32_t>(ch) ||
+        img->data.size() < static_cast<std::size_t>(img->step) * img->height)
+      throw InputError(path, where(topic, ordinal) + ": image data is shorter than height x step");
+    const cv::Mat wrapped(static_cast<int>(img->height), static_cast<int>(img->width), CV_8UC(ch),
+                          const_cast<std::uint8_t*>(img->data.data()), img->step);
+    if (img->encoding == "rgb8") rgb = wrapped.clone();
+    else if (img->encoding == "bgr8") cv::cvtColor(wrapped, rgb, cv::COLOR_BGR2RGB);
+    else if (img->encoding == "rgba8") cv::cvtColor(wrapped, rgb, cv::COLOR_RGBA2RGB);
+    else cv::cvtColor(wrapped, rgb, cv::COLOR_BGRA2RGB);
+  } else {
+    const auto img = m.instantiate<sensor_msgs::CompressedImage>();
+    if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+    const cv::Mat bgr = cv::imdecode(img->data, cv::IMREAD_COLOR);
+    if (bgr.empty()) throw InputError(path, where(topic, ordinal) + ": the " + img->format + " data does not decode");
+    cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  }
+  return rgb;
+}
+
+std::vector<std::string> splitCsv(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cell;
+  for (char c : line) {
+    if (c == ',') {
+      out.push_back(cell);
+      cell.clear();
+    } else if (c != ' ' && c != '\t' && c != '\r') {
+      cell += c;
+    }
+  }
+  out.push_back(cell);
+  return out;
+}
+
+int parseInt(const std::string& text, const std::string& path, int line, int lo, int hi) {
+  try {
+    std::size_t used = 0;
+    const int v = std::stoi(text, &used);
+    if (used == text.size() && v >= lo && v <= hi) return v;
+  } catch (const std::exception&) {
+  }
+  throw InputError(path, line, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                                   "], got '" + text + "'");
+}
+
 }  // namespace
+
+SegmentationColors readSegmentationColors(const std::string& rgb_ids_path, const std::string& vehicle_ids_path) {
+  auto lines = [](const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw InputError(path, "cannot open");
+    std::vector<std::string> out;
+    for (std::string l; std::getline(in, l);) out.push_back(l);
+    return out;
+  };
+  // Moving vehicles, in file order: their mask value is 1 + position.
+  std::map<int, std::uint8_t> label_of_id;
+  const auto vehicles = lines(vehicle_ids_path);
+  for (std::size_t i = 1; i < vehicles.size(); ++i) {  // line 1: header
+    if (vehicles[i].find_first_not_of(" \t\r") == std::string::npos) continue;
+    const auto cells = splitCsv(vehicles[i]);
+    if (cells.size() != 2) throw InputError(vehicle_ids_path, static_cast<int>(i + 1), "expected 'id, name'");
+    const int id = parseInt(cells[0], vehicle_ids_path, static_cast<int>(i + 1), 0, 255);
+    if (cells[1].find("dynamic") != std::string::npos) {
+      if (label_of_id.size() >= 255) throw InputError(vehicle_ids_path, "more than 255 moving vehicles");
+      label_of_id[id] = static_cast<std::uint8_t>(label_of_id.size() + 1);
+    }
+  }
+  SegmentationColors colors;
+  const auto rgb = lines(rgb_ids_path);
+  for (std::size_t i = 1; i < rgb.size(); ++i) {
+    if (rgb[i].find_first_not_of(" \t\r") == std::string::npos) continue;
+    const auto cells = splitCsv(rgb[i]);
+    const int line = static_cast<int>(i + 1);
+    if (cells.size() != 4) throw InputError(rgb_ids_path, line, "expected 'id,r,g,b'");
+    const int id = parseInt(cells[0], rgb_ids_path, line, 0, 255);
+    const std::uint32_t key = (static_cast<std::uint32_t>(parseInt(cells[1], rgb_ids_path, line, 0, 255)) << 16) |
+                              (static_cast<std::uint32_t>(parseInt(cells[2], rgb_ids_path, line, 0, 255)) << 8) |
+                              static_cast<std::uint32_t>(parseInt(cells[3], rgb_ids_path, line, 0, 255));
+    const auto it = label_of_id.find(id);
+    colors.label_of_rgb[key] = it == label_of_id.end() ? 0 : it->second;
+  }
+  return colors;
+}
+
+cv::Mat labelsFromColors(const cv::Mat& rgb, const SegmentationColors& colors) {
+  cv::Mat labels(rgb.size(), CV_8UC1, cv::Scalar(0));
+  for (int y = 0; y < rgb.rows; ++y) {
+    const cv::Vec3b* in = rgb.ptr<cv::Vec3b>(y);
+    uchar* out = labels.ptr<uchar>(y);
+    for (int x = 0; x < rgb.cols; ++x) {
+      const std::uint32_t key = (static_cast<std::uint32_t>(in[x][0]) << 16) |
+                                (static_cast<std::uint32_t>(in[x][1]) << 8) | in[x][2];
+      const auto it = colors.label_of_rgb.find(key);
+      out[x] = it == colors.label_of_rgb.end() ? 0 : it->second;
+    }
+  }
+  return labels;
+}
 
 BagTopics bagTopics(const Config& config, const std::string& groundtruth_topic) {
   BagTopics t;
@@ -262,6 +401,7 @@ BagTopics bagTopics(const Config& config, const std::string& groundtruth_topic) 
   t.image0 = config.image0_topic;
   t.image1 = config.num_cam == 2 ? config.image1_topic : "";
   t.groundtruth = groundtruth_topic.empty() ? config.groundtruth_topic : groundtruth_topic;
+  t.segmentation = config.segmentation_topic;
   return t;
 }
 
@@ -305,12 +445,28 @@ BagIndex indexBag(const std::string& path, const BagTopics& topics, int expected
       ds.groundtruth = indexGroundTruth(bag, path, topics.groundtruth, tg);
       ds.has_groundtruth = !ds.groundtruth.empty();
     }
+    if (!topics.segmentation.empty()) {
+      const std::string ts =
+          checkTopic(path, types, topics.segmentation, "segmentation_topic", {kImage, kCompressed});
+      index.segmentation = indexSegmentation(bag, path, topics.segmentation, ts);
+    }
     if (ds.cam0.empty()) throw InputError(path, "topic '" + topics.image0 + "' holds no images");
     if (ds.imu.empty()) throw InputError(path, "topic '" + topics.imu + "' holds no IMU samples");
     if (ds.stereo()) {
       pairByTime(ds.cam0, ds.cam1, options.pair_tolerance_ns, ds.pairs, ds.unmatched0, ds.unmatched1);
     } else {
       for (std::size_t i = 0; i < ds.cam0.size(); ++i) ds.pairs.push_back({ds.cam0[i].t_ns, i, 0});
+    }
+    if (!index.segmentation.empty()) {  // each frame's segmentation: the one with cam0's stamp
+      std::vector<StereoPair> seg_pairs;
+      std::vector<std::size_t> u0, u1;
+      pairByTime(ds.cam0, index.segmentation, options.pair_tolerance_ns, seg_pairs, u0, u1);
+      std::map<std::size_t, long> seg_of_cam0;
+      for (const auto& p : seg_pairs) seg_of_cam0[p.i0] = static_cast<long>(p.i1);
+      for (const auto& p : ds.pairs) {
+        const auto it = seg_of_cam0.find(p.i0);
+        index.segmentation_of_pair.push_back(it == seg_of_cam0.end() ? -1 : it->second);
+      }
     }
   } catch (const rosbag::BagException& e) {
     throw InputError(path, std::string("reading the bag failed (truncated or damaged?): ") + e.what());
@@ -324,23 +480,35 @@ struct BagSource::Reader {
   rosbag::Bag bag;
   std::unique_ptr<rosbag::View> view;
   rosbag::View::iterator it;
-  std::string type0, type1;
-  std::map<std::size_t, cv::Mat> left, right;
-  std::size_t seen0 = 0, seen1 = 0;
-  std::vector<bool> needed0, needed1;  ///< the messages that belong to a pair
+  std::string type0, type1, type_seg;
+  std::map<std::size_t, cv::Mat> left, right, seg;
+  std::size_t seen0 = 0, seen1 = 0, seen_seg = 0;
+  std::vector<bool> needed0, needed1, needed_seg;  ///< the messages that belong to a frame
 };
 
-BagSource::BagSource(BagIndex index, int expected_width, int expected_height)
-    : index_(std::move(index)), width_(expected_width), height_(expected_height), reader_(std::make_unique<Reader>()) {
+BagSource::BagSource(BagIndex index, int expected_width, int expected_height, std::optional<SegmentationColors> masks)
+    : index_(std::move(index)),
+      masks_(std::move(masks)),
+      width_(expected_width),
+      height_(expected_height),
+      reader_(std::make_unique<Reader>()) {
+  if (masks_ && index_.segmentation.empty())
+    throw InputError(index_.path, "masks were asked for but the bag has no segmentation topic (segmentation_topic)");
   openBag(reader_->bag, index_.path);
   std::vector<std::string> topics{index_.topics.image0};
   if (index_.dataset.stereo()) topics.push_back(index_.topics.image1);
+  if (masks_) topics.push_back(index_.topics.segmentation);
   reader_->view = std::make_unique<rosbag::View>(reader_->bag, rosbag::TopicQuery(topics));
   reader_->it = reader_->view->begin();
   for (const auto& t : index_.all_topics) {
     if (t.topic == index_.topics.image0) reader_->type0 = t.type;
     if (t.topic == index_.topics.image1) reader_->type1 = t.type;
+    if (t.topic == index_.topics.segmentation) reader_->type_seg = t.type;
   }
+  reader_->needed_seg.assign(index_.segmentation.size(), false);
+  if (masks_)
+    for (long k : index_.segmentation_of_pair)
+      if (k >= 0) reader_->needed_seg[static_cast<std::size_t>(k)] = true;
   reader_->needed0.assign(index_.dataset.cam0.size(), false);
   reader_->needed1.assign(index_.dataset.cam1.size(), false);
   for (const auto& p : index_.dataset.pairs) {
@@ -351,10 +519,19 @@ BagSource::BagSource(BagIndex index, int expected_width, int expected_height)
 
 BagSource::~BagSource() = default;
 
-bool BagSource::nextPairImages(cv::Mat& left, cv::Mat& right) {
+bool BagSource::nextPairImages(cv::Mat& left, cv::Mat& right, cv::Mat& mask) {
   Reader& r = *reader_;
   const StereoPair& pair = index_.dataset.pairs[next_pair_];
   const bool stereo = index_.dataset.stereo();
+  long seg_k = -1;
+  if (masks_) {
+    seg_k = index_.segmentation_of_pair[next_pair_];
+    if (seg_k < 0)
+      throw InputError(index_.path, "frame " + std::to_string(next_pair_ + 1) + " (cam0 stamp " +
+                                        std::to_string(pair.t_ns) + " ns) has no segmentation image with its stamp on '" +
+                                        index_.topics.segmentation + "'");
+  }
+  const std::size_t seg_i = static_cast<std::size_t>(std::max(0L, seg_k));
   const std::string& path = index_.path;
   auto decode = [&](const rosbag::MessageInstance& m, const std::string& type, const std::string& topic,
                     std::size_t ordinal) {
@@ -372,7 +549,7 @@ bool BagSource::nextPairImages(cv::Mat& left, cv::Mat& right) {
     return gray;
   };
   try {
-    while (!(r.left.count(pair.i0) && (!stereo || r.right.count(pair.i1)))) {
+    while (!(r.left.count(pair.i0) && (!stereo || r.right.count(pair.i1)) && (!masks_ || r.seg.count(seg_i)))) {
       if (r.it == r.view->end())
         throw InputError(path, "the bag ended before the images of frame " + std::to_string(next_pair_ + 1));
       const rosbag::MessageInstance& m = *r.it;
@@ -382,6 +559,13 @@ bool BagSource::nextPairImages(cv::Mat& left, cv::Mat& right) {
       } else if (stereo && m.getTopic() == index_.topics.image1) {
         const std::size_t k = r.seen1++;
         if (k < r.needed1.size() && r.needed1[k]) r.right[k] = decode(m, r.type1, m.getTopic(), k + 1);
+      } else if (masks_ && m.getTopic() == index_.topics.segmentation) {
+        const std::size_t k = r.seen_seg++;
+        if (k < r.needed_seg.size() && r.needed_seg[k]) {
+          const cv::Mat rgb = toRgb(m, r.type_seg, path, m.getTopic(), k + 1);
+          checkSize(path, m.getTopic(), k + 1, rgb.cols, rgb.rows, width_, height_);
+          r.seg[k] = labelsFromColors(rgb, *masks_);
+        }
       }
       ++r.it;
     }
@@ -393,6 +577,10 @@ bool BagSource::nextPairImages(cv::Mat& left, cv::Mat& right) {
   if (stereo) {
     right = std::move(r.right[pair.i1]);
     r.right.erase(r.right.begin(), r.right.upper_bound(pair.i1));
+  }
+  if (masks_) {
+    mask = std::move(r.seg[seg_i]);
+    r.seg.erase(r.seg.begin(), r.seg.upper_bound(seg_i));
   }
   return true;
 }
@@ -407,7 +595,7 @@ std::optional<Measurement> BagSource::next() {
   StereoFrame frame;
   frame.t_ns = ds.pairs[next_pair_].t_ns;
   frame.index = next_pair_;
-  nextPairImages(frame.left, frame.right);
+  nextPairImages(frame.left, frame.right, frame.left_mask);
   ++next_pair_;
   return Measurement{std::move(frame)};
 }

@@ -8,7 +8,10 @@
 // image are kept; image pixels are not), then streamed: images are decoded as the
 // frames are consumed, so memory stays bounded by a few frames whatever the bag's size.
 
+#include <cstdint>
 #include <memory>
+#include <optional>
+#include <unordered_map>
 #include <string>
 #include <vector>
 
@@ -29,7 +32,24 @@ struct BagTopics {
   std::string image0 = "/cam0/image_raw";
   std::string image1 = "/cam1/image_raw";
   std::string groundtruth;
+  /// Left-camera segmentation in colour (VIODE: /cam0/segmentation), empty = none;
+  /// read only for masks (seg mode, classification metrics).
+  std::string segmentation;
 };
+
+/// VIODE's segmentation colours: RGB -> object id (rgb_ids.txt), and which ids are
+/// moving vehicles (vehicle_ids_*.txt, names containing "dynamic"). A moving vehicle's
+/// mask value is 1 + its position in that list; every other colour is static (0).
+struct SegmentationColors {
+  std::unordered_map<std::uint32_t, std::uint8_t> label_of_rgb;  ///< (r << 16 | g << 8 | b) -> mask value
+};
+
+/// Reads rgb_ids.txt (`id,r,g,b`) and vehicle_ids_*.txt (`id, name`). Throws InputError
+/// naming file and line.
+SegmentationColors readSegmentationColors(const std::string& rgb_ids_path, const std::string& vehicle_ids_path);
+
+/// The CV_8UC1 mask (moving-object labels, 0 = static) of a CV_8UC3 image in RGB order.
+cv::Mat labelsFromColors(const cv::Mat& rgb, const SegmentationColors& colors);
 
 /// The topics a config names (image1 only with two cameras); a non-empty
 /// `groundtruth_topic` overrides the config's.
@@ -49,6 +69,8 @@ struct BagIndex {
   BagTopics topics;
   std::vector<BagTopicInfo> all_topics;
   EurocDataset dataset;
+  std::vector<ImageRecord> segmentation;  ///< stamps of the segmentation topic (when named)
+  std::vector<long> segmentation_of_pair; ///< per pair: the segmentation image with cam0's stamp, -1 = none
 };
 
 /// True when `path` names a bag file (a regular file whose first bytes are the
@@ -71,7 +93,10 @@ BagIndex indexBag(const std::string& path, const BagTopics& topics, int expected
 /// (cv::cvtColor for rgb8, bgr8, rgba8, bgra8; cv::imdecode for png and jpeg).
 class BagSource : public DataSource {
  public:
-  BagSource(BagIndex index, int expected_width, int expected_height);
+  /// With `masks`, every frame's left_mask comes from the segmentation topic (an
+  /// InputError for a frame without one).
+  BagSource(BagIndex index, int expected_width, int expected_height,
+            std::optional<SegmentationColors> masks = std::nullopt);
   ~BagSource() override;
   std::optional<Measurement> next() override;
   std::size_t frameCount() const override { return index_.dataset.pairs.size(); }
@@ -79,8 +104,9 @@ class BagSource : public DataSource {
 
  private:
   struct Reader;  // the open bag and its view (ROS types stay in the .cpp)
-  bool nextPairImages(cv::Mat& left, cv::Mat& right);
+  bool nextPairImages(cv::Mat& left, cv::Mat& right, cv::Mat& mask);
   BagIndex index_;
+  std::optional<SegmentationColors> masks_;
   int width_, height_;
   std::unique_ptr<Reader> reader_;
   std::size_t next_imu_ = 0, next_pair_ = 0;

@@ -297,6 +297,14 @@ Config loadConfig(const std::string& path) {
                             {"image1_topic", &c.image1_topic},
                             {"groundtruth_topic", &c.groundtruth_topic}})
     if (f.root[key]) *value = getString(f, f.root, key, "a ROS topic name");
+  if (f.root["segmentation_topic"]) c.segmentation_topic = getString(f, f.root, "segmentation_topic", "a ROS topic name");
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  for (auto [key, value] : {std::pair<const char*, std::string*>{"segmentation_rgb_ids", &c.segmentation_rgb_ids},
+                            {"segmentation_vehicle_ids", &c.segmentation_vehicle_ids}})
+    if (f.root[key]) *value = (folder / getString(f, f.root, key, "a file next to the config")).string();
+  if (!c.segmentation_topic.empty() && (c.segmentation_rgb_ids.empty() || c.segmentation_vehicle_ids.empty()))
+    throw InputError(path, lineOf(f.root["segmentation_topic"]),
+                     "segmentation_topic needs segmentation_rgb_ids and segmentation_vehicle_ids (VIODE's tables)");
   return c;
 }
 

@@ -101,6 +101,10 @@ struct Config {
   /// groundtruth_topic, empty = none). Used when the dataset is a ROS1 bag.
   std::string imu_topic = "/imu0", image0_topic = "/cam0/image_raw", image1_topic = "/cam1/image_raw";
   std::string groundtruth_topic;
+  /// VIODE-style segmentation in a bag: its topic (`segmentation_topic`, e.g.
+  /// /cam0/segmentation) and colour tables (`segmentation_rgb_ids`,
+  /// `segmentation_vehicle_ids`, resolved against the config's folder).
+  std::string segmentation_topic, segmentation_rgb_ids, segmentation_vehicle_ids;
 };
 
 /// Reads a camodocal camera file (PINHOLE or KANNALA_BRANDT). Throws InputError.
