@@ -5,6 +5,7 @@ bag_check.py setup IDYVINS WORK   simulate a short sequence, write bags of it wi
 bag_check.py run IDYVINS WORK     run on the folder, on each bag and on a converted bag: byte-identical
                                   outputs, same ATE
 bag_check.py seg IDYVINS WORK     masks from a segmentation topic: seg and idy identical to the folder's
+bag_check.py viode IDYVINS WORK   simulate --format both: VIODE's topics and types; bag and folder alike
 bag_check.py info IDYVINS WORK    info on the folder and on a bag: same counts, rates and gaps
 bag_check.py bad IDYVINS WORK     bad bags and configs: exit code 1 and one clear line each
 """
@@ -123,6 +124,54 @@ def test_seg(idy, work):
               "%s: classification figures identical (%s)" % (mode, json.dumps(b["classification"])[:120]))
 
 
+def test_viode(idy, work):
+    """simulate --format both: VIODE's topics and types (read back by python3-rosbag), and
+    run on the bag as on the folder, seg mode included."""
+    import rosbag
+    import numpy as np
+    out = os.path.join(work, "viode_sim")
+    shutil.rmtree(out, ignore_errors=True)
+    r = sh([idy, "simulate", "--scene", "parking_lot", "--level", "mid", "--seed", "2", "--duration", "3", "--out", out,
+            "--format", "both", "--compression", "lz4"])
+    check(r.returncode == 0, "simulate --format both: " + r.stderr.strip()[-300:])
+    bag_path = os.path.join(out, "2_mid.bag")
+    check(os.path.exists(bag_path), "the bag is named as VIODE's (2_mid.bag)")
+    if not os.path.exists(bag_path):
+        return
+    bag = rosbag.Bag(bag_path)
+    types = {t: i.msg_type for t, i in bag.get_type_and_topic_info().topics.items()}
+    check(types == {"/imu0": "sensor_msgs/Imu", "/cam0/image_raw": "sensor_msgs/Image",
+                    "/cam1/image_raw": "sensor_msgs/Image", "/odometry": "nav_msgs/Odometry",
+                    "/cam0/segmentation": "sensor_msgs/Image"}, "VIODE's topics and types: %s" % types)
+    table = {}
+    for row in open(os.path.join(out, "config", "rgb_ids.txt")).read().splitlines()[1:]:
+        i, rr, gg, bb = [int(x) for x in row.split(",")]
+        table[(rr, gg, bb)] = i
+    seen = set()
+    for _, m, _ in bag.read_messages(topics=["/cam0/segmentation"]):
+        check(m.encoding == "rgb8", "segmentation encoding rgb8") if not seen else None
+        px = np.frombuffer(m.data, dtype=np.uint8).reshape(m.height, m.width, 3)
+        seen |= {tuple(int(v) for v in c) for c in np.unique(px.reshape(-1, 3), axis=0)}
+    bag.close()
+    check(seen and all(c in table for c in seen), "every segmentation colour is in VIODE's rgb_ids.txt")
+    moving = [int(l.split(",")[0]) for l in open(os.path.join(out, "config", "vehicle_ids_parking_lot.txt"))
+              .read().splitlines()[1:] if "dynamic" in l]
+    check(any(table[c] in moving for c in seen), "moving vehicles coloured as VIODE's dynamic vehicles")
+    cfg = os.path.join(out, "config", "sim_stereo_imu_config.yaml")
+    outs = []
+    for name, dataset in [("folder", out), ("bag", bag_path)]:
+        o = os.path.join(work, "out_viode_" + name)
+        r = sh([idy, "run", "-c", cfg, "-d", dataset, "-o", o, "--mode", "seg", "--threads", "1"])
+        check(r.returncode == 0, "seg on the simulated %s: %s" % (name, r.stderr.strip()[-300:]))
+        outs.append(o)
+    if all(os.path.exists(os.path.join(o, "stats.json")) for o in outs):
+        a, b = [json.load(open(os.path.join(o, "stats.json")))["summary"] for o in outs]
+        check(filecmp.cmp(os.path.join(outs[0], "trajectory.tum"), os.path.join(outs[1], "trajectory.tum"),
+                          shallow=False), "simulated bag: trajectory byte-identical to the folder's")
+        check(a.get("ate_rmse_m") == b.get("ate_rmse_m") and a["classification"] == b["classification"],
+              "simulated bag: same ATE and classification as the folder")
+
+
 def info_json(idy, args):
     r = sh([idy, "info", "--json"] + args)
     return r, (json.loads(r.stdout) if r.returncode == 0 else None)
@@ -196,7 +245,8 @@ def test_bad(idy, work):
 
 def main():
     cmd, idy, work = sys.argv[1], sys.argv[2], sys.argv[3]
-    {"setup": setup, "run": test_run, "seg": test_seg, "info": test_info, "bad": test_bad}[cmd](idy, work)
+    {"setup": setup, "run": test_run, "seg": test_seg, "viode": test_viode, "info": test_info,
+     "bad": test_bad}[cmd](idy, work)
     print("%d failure(s)" % len(failures))
     return 1 if failures else 0
 

@@ -2,9 +2,12 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 
 #include "commands.h"
 #include "core/error.h"
+#include "io/bag_writer.h"
+#include "io/euroc_dataset.h"
 #include "progress.h"
 #include "sim/simulator.h"
 
@@ -17,7 +20,43 @@ struct SimulateArgs {
   double duration = 60.0, noise = 1.0, image_noise = 2.0;
   int threads = 2;
   bool opening_vehicle = false, standard_set = false;
+  std::string format = "euroc", compression = "none", viode_tables = IDYVINS_VIODE_TABLES;
 };
+
+/// VIODE's file name for a traffic level (0_none .. 3_high).
+std::string viodeBagName(const std::string& level) {
+  const char* names[] = {"none", "low", "mid", "high"};
+  for (int i = 0; i < 4; ++i)
+    if (level == names[i]) return std::to_string(i) + "_" + level + ".bag";
+  return level + ".bag";
+}
+
+/// OUT/<k>_<level>.bag with VIODE's topics, the colour tables copied into OUT/config and
+/// the config naming the bag's ground-truth and segmentation topics.
+void writeBag(const SimulateArgs& a, const std::string& scene, const std::string& level, const std::string& out) {
+  namespace fs = std::filesystem;
+  const std::string vehicles = scene == "parking_lot" ? "vehicle_ids_parking_lot.txt" : "vehicle_ids_city_day.txt";
+  const fs::path tables(a.viode_tables), config_dir = fs::path(out) / "config";
+  for (const std::string& f : {std::string("rgb_ids.txt"), vehicles}) {
+    if (!fs::exists(tables / f))
+      throw InputError((tables / f).string(), "VIODE's segmentation table is missing (set --viode-tables)");
+    fs::copy_file(tables / f, config_dir / f, fs::copy_options::overwrite_existing);
+  }
+  io::BagWriteOptions w;
+  w.compression = a.compression;
+  w.rgb_ids = (config_dir / "rgb_ids.txt").string();
+  w.vehicle_ids = (config_dir / vehicles).string();
+  const std::string bag = (fs::path(out) / viodeBagName(level)).string();
+  io::writeViodeBag(io::readEurocDataset(out), bag, w);
+  std::ofstream cfg(config_dir / "sim_stereo_imu_config.yaml", std::ios::app);
+  cfg << "\n# ROS1 bag (" << viodeBagName(level) << "): VIODE's topics\n"
+      << "imu_topic: \"/imu0\"\nimage0_topic: \"/cam0/image_raw\"\nimage1_topic: \"/cam1/image_raw\"\n"
+      << "groundtruth_topic: \"/odometry\"\nsegmentation_topic: \"/cam0/segmentation\"\n"
+      << "segmentation_rgb_ids: \"rgb_ids.txt\"\nsegmentation_vehicle_ids: \"" << vehicles << "\"\n";
+  if (!cfg) throw InputError((config_dir / "sim_stereo_imu_config.yaml").string(), "cannot append the bag topics");
+  if (a.format == "bag") fs::remove_all(fs::path(out) / "mav0");
+  std::printf("%s: VIODE topics /imu0 /cam0/image_raw /cam1/image_raw /odometry /cam0/segmentation\n", bag.c_str());
+}
 
 int simulateOne(const SimulateArgs& a, const std::string& scene, const std::string& level, const std::string& out) {
   sim::SimOptions o;
@@ -46,6 +85,7 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
               out.c_str(), scene.c_str(), level.c_str(), static_cast<unsigned long long>(a.seed), a.duration,
               r.frames, r.imu_samples, r.path_length_m, 100 * r.coverage.mean, 100 * r.coverage.max,
               100 * r.coverage.frames_over_30pct, r.seconds);
+  if (a.format != "euroc") writeBag(a, scene, level, out);
   return kOk;
 }
 
@@ -86,6 +126,15 @@ void registerSimulate(CLI::App& app, int& exit_code) {
   cmd->add_option("--noise", a->noise, "IMU noise scale (0 = perfect IMU, 1 = ADIS16448-like)");
   cmd->add_option("--image-noise", a->image_noise, "pixel noise sigma, gray levels");
   cmd->add_option("--threads", a->threads, "rendering threads")->check(CLI::Range(1, 64));
+  cmd->add_option("--format", a->format,
+                  "euroc (default): the EuRoC folder; bag: OUT/<k>_<level>.bag (VIODE's names) with VIODE's topics\n"
+                  "and message types (/imu0, /cam0/image_raw and /cam1/image_raw mono8, /odometry, /cam0/segmentation\n"
+                  "coloured with VIODE's tables) and the config naming them; both: the folder and the bag")
+      ->check(CLI::IsMember({"euroc", "bag", "both"}));
+  cmd->add_option("--compression", a->compression, "bag chunks: none (default), bz2, lz4")
+      ->check(CLI::IsMember({"none", "bz2", "lz4"}));
+  cmd->add_option("--viode-tables", a->viode_tables,
+                  "folder with VIODE's rgb_ids.txt and vehicle_ids_*.txt (default: the source tree's config/viode)");
   cmd->add_flag("--opening-vehicle", a->opening_vehicle,
                 "a vehicle crosses close in front of the drone during the first seconds");
   cmd->add_flag("--standard-set", a->standard_set,
