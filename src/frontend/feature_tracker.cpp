@@ -301,7 +301,7 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
   std::vector<std::size_t> guided, full;
   for (std::size_t i = 0; i < n; ++i) {
     const PrevObs* p = prev_obs ? &(*prev_obs)[(*which)[i]] : nullptr;
-    if (p && p->has_right) {
+    if (p && p->has_right && params_.klt_stereo_guided_levels > 0) {
       const Eigen::Vector2d guess = features[(*which)[i]].uv + (p->uv_right - p->uv);
       pr[i] = cv::Point2f(static_cast<float>(guess.x()), static_cast<float>(guess.y()));
       guided.push_back(i);

@@ -27,8 +27,11 @@ struct TrackerParams {
   /// narrow basin suffices (VINS-Fusion uses 1 for its reverse check).
   int klt_back_levels = 1;
   /// Pyramid levels of the right-image search started from a track's previous disparity
-  /// (the disparity of a static point changes by a fraction of a pixel between frames).
-  int klt_stereo_guided_levels = 2;
+  /// (the disparity of a static point changes by a fraction of a pixel between frames);
+  /// 0: every search starts at the left position on klt_levels. Off by default: with 2
+  /// levels the standard benchmark at 7bb6014 lost recall in city low (86.2 -> 80.8 %)
+  /// and idy's margin over the baseline at city none and mid (docs/results-history.md).
+  int klt_stereo_guided_levels = 0;
   int klt_iterations = 30;     ///< KLT stops after this many iterations ...
   double klt_epsilon = 0.01;   ///< ... or when the update is below this (px)
   double flow_back_px = 0.5;       ///< max forward-backward distance
