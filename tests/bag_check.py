@@ -6,6 +6,7 @@ bag_check.py run IDYVINS WORK     run on the folder, on each bag and on a conver
                                   outputs, same ATE
 bag_check.py seg IDYVINS WORK     masks from a segmentation topic: seg and idy identical to the folder's
 bag_check.py viode IDYVINS WORK   simulate --format both: VIODE's topics and types; bag and folder alike
+bag_check.py viode_bench IDYVINS WORK  bench --suite viode on a VIODE-like tree of simulated bags
 bag_check.py info IDYVINS WORK    info on the folder and on a bag: same counts, rates and gaps
 bag_check.py bad IDYVINS WORK     bad bags and configs: exit code 1 and one clear line each
 """
@@ -172,6 +173,39 @@ def test_viode(idy, work):
               "simulated bag: same ATE and classification as the folder")
 
 
+def test_viode_bench(idy, work):
+    """bench --suite viode on a VIODE-like tree written by simulate --format bag."""
+    tree = os.path.join(work, "viode_tree")
+    shutil.rmtree(tree, ignore_errors=True)
+    for env, scene, level, name in [("city_day", "city", "high", "3_high"), ("parking_lot", "parking_lot", "mid", "2_mid")]:
+        sim = os.path.join(work, "viode_sim_" + env)
+        shutil.rmtree(sim, ignore_errors=True)
+        r = sh([idy, "simulate", "--scene", scene, "--level", level, "--seed", "3", "--duration", "3", "--out", sim,
+                "--format", "bag"])
+        check(r.returncode == 0 and not os.path.exists(os.path.join(sim, "mav0")),
+              "simulate --format bag %s (no EuRoC folder left)" % env)
+        os.makedirs(os.path.join(tree, env), exist_ok=True)
+        shutil.move(os.path.join(sim, name + ".bag"), os.path.join(tree, env, name + ".bag"))
+    cfg_dir = os.path.join(work, "viode_sim_city_day", "config")
+    for f in os.listdir(os.path.join(HERE, "..", "config", "viode")):
+        if f.startswith("vehicle_ids_"):
+            shutil.copy(os.path.join(HERE, "..", "config", "viode", f), cfg_dir)
+    out = os.path.join(work, "viode_bench")
+    shutil.rmtree(out, ignore_errors=True)
+    r = sh([idy, "bench", "--suite", "viode", "--data", tree, "--out", out, "--modes", "baseline,seg,idy", "--config",
+            os.path.join(cfg_dir, "sim_stereo_imu_config.yaml")])
+    check(r.returncode == 0, "bench --suite viode: " + r.stderr.strip()[-300:])
+    t1 = open(os.path.join(out, "table1.md")).read() if r.returncode == 0 else ""
+    header = [l for l in t1.splitlines() if l.startswith("| mode |")]
+    check(bool(header) and "city_day_high" in header[0] and "parking_lot_mid" in header[0],
+          "table1 has the VIODE columns: %s" % (header[0] if header else None))
+    rows = [l for l in t1.splitlines() if l.startswith("| baseline |") or l.startswith("| seg |") or l.startswith("| idy |")]
+    check(len(rows) == 3 and all(" x " not in l for l in rows), "every mode has an ATE in every column: %s" % rows)
+    dyn = open(os.path.join(out, "dynamic.md")).read() if r.returncode == 0 else ""
+    check("| city_day_high | seg |" in dyn and "| parking_lot_mid | idy |" in dyn,
+          "classification against the segmentation masks for every bag")
+
+
 def info_json(idy, args):
     r = sh([idy, "info", "--json"] + args)
     return r, (json.loads(r.stdout) if r.returncode == 0 else None)
@@ -245,7 +279,8 @@ def test_bad(idy, work):
 
 def main():
     cmd, idy, work = sys.argv[1], sys.argv[2], sys.argv[3]
-    {"setup": setup, "run": test_run, "seg": test_seg, "viode": test_viode, "info": test_info,
+    {"setup": setup, "run": test_run, "seg": test_seg, "viode": test_viode, "viode_bench": test_viode_bench,
+     "info": test_info,
      "bad": test_bad}[cmd](idy, work)
     print("%d failure(s)" % len(failures))
     return 1 if failures else 0

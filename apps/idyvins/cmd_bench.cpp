@@ -27,7 +27,7 @@ namespace idyvins::app {
 namespace {
 
 struct BenchArgs {
-  std::string suite = "standard", out, seeds = "1", data, modes;
+  std::string suite = "standard", out, seeds = "1", data, modes, config = IDYVINS_VIODE_CONFIG;
   double duration = 60.0;
   bool ablations = false;
   bool reuse_runs = false;
@@ -45,8 +45,9 @@ std::string self() {
 
 std::string quote(const std::string& s) { return "'" + s + "'"; }
 
+/// One run: a sequence (in a table column `group` at traffic `level`) in one mode.
 struct Job {
-  std::string sequence, mode, dataset, out;
+  std::string sequence, group, level, mode, dataset, config, out;
 };
 
 nlohmann::json readSummary(const std::string& run_dir) {
@@ -134,7 +135,7 @@ void runJobs(const std::vector<Job>& jobs, const BenchArgs& a, const std::string
         ++done;
         continue;
       }
-      const std::string cmd = quote(exe) + " run --config " + quote(j.dataset + "/config/sim_stereo_imu_config.yaml") +
+      const std::string cmd = quote(exe) + " run --config " + quote(j.config) +
                               " --dataset " + quote(j.dataset) + " --out " + quote(j.out) + " --mode " + j.mode +
                               " --threads " + std::to_string(a.run_threads) + " > " +
                               quote(j.out + ".log") + " 2>&1";
@@ -166,10 +167,8 @@ Collected collect(const std::vector<Job>& jobs) {
   for (const Job& j : jobs) {
     const nlohmann::json s = readSummary(j.out);
     c.results.push_back({{"sequence", j.sequence}, {"mode", j.mode}, {"dataset", j.dataset}, {"run", j.out}, {"summary", s}});
-    const std::string key = j.sequence.substr(0, j.sequence.rfind("_s"));
-    c.ate[key][j.mode].push_back(ateOf(s));
-    const std::string level = key.substr(key.rfind('_') + 1);
-    if (!s.is_null()) c.by_level[level][j.mode].push_back(s);
+    c.ate[j.group][j.mode].push_back(ateOf(s));
+    if (!s.is_null()) c.by_level[j.level][j.mode].push_back(s);
   }
   return c;
 }
@@ -193,17 +192,15 @@ void tableHeader(std::ostringstream& t, const std::vector<std::string>& columns)
 
 /// Table 1: ATE RMSE (m), mean over seeds, best per column in bold, failures x; then ratios
 /// to the baseline (seg, ground-truth masks, is what a perfect detector would give).
-std::string table1(const Collected& c, const std::vector<std::string>& modes, const std::string& seeds) {
+std::string table1(const Collected& c, const std::vector<std::string>& modes, const std::string& seeds,
+                   const std::vector<std::string>& columns) {
   auto ate = [&](const std::string& col, const std::string& mode) {
     const auto it = c.ate.find(col);
     if (it == c.ate.end() || !it->second.count(mode)) return static_cast<double>(NAN);
     return meanOrNan(it->second.at(mode));
   };
-  std::vector<std::string> columns;
-  for (const auto& scene : kScenes)
-    for (const auto& level : kLevels) columns.push_back(scene + "_" + level);
   std::ostringstream t1;
-  t1 << "ATE RMSE (m, SE3 alignment), mean over seeds " << seeds
+  t1 << "ATE RMSE (m, SE3 alignment)" << (seeds.empty() ? std::string() : ", mean over seeds " + seeds)
      << "; x = failure (no estimate, or ATE > 10 % of path).\n\n";
   tableHeader(t1, columns);
   for (const auto& mode : modes) {
@@ -291,8 +288,51 @@ void plots(const fs::path& out) {
   if (std::system(cmd.c_str()) != 0) std::printf("plots failed, see %s\n", (out / "plots.log").c_str());
 }
 
+const std::vector<std::string> kViodeEnvironments = {"city_day", "city_night", "parking_lot"};
+const std::vector<std::string> kViodeBags = {"0_none", "1_low", "2_mid", "3_high"};
+
+/// VIODE's bags under `dir` (<environment>/<k>_<level>.bag, as published), each with a
+/// config: a copy of `base`'s folder naming the environment's vehicle table.
+std::vector<Job> viodeJobs(const BenchArgs& a, const fs::path& dir, const fs::path& out,
+                           const std::vector<std::string>& modes, std::vector<std::string>& columns) {
+  const fs::path base(a.config);
+  if (!fs::is_regular_file(base)) throw InputError(a.config, "no such config (set --config)");
+  std::vector<Job> jobs;
+  for (const auto& env : kViodeEnvironments) {
+    bool any = false;
+    for (const auto& name : kViodeBags) {
+      const fs::path bag = dir / env / (name + ".bag");
+      if (!fs::is_regular_file(bag)) continue;
+      if (!any) {  // the environment's config folder
+        const fs::path cfg_dir = out / "configs" / env;
+        fs::create_directories(cfg_dir);
+        for (const auto& f : fs::directory_iterator(base.parent_path()))
+          if (f.is_regular_file()) fs::copy_file(f.path(), cfg_dir / f.path().filename(), fs::copy_options::overwrite_existing);
+        // The environment's vehicle table replaces the base config's.
+        std::ifstream in(base);
+        std::string text, line;
+        while (std::getline(in, line))
+          if (line.rfind("segmentation_vehicle_ids:", 0) != 0) text += line + "\n";
+        std::ofstream(cfg_dir / base.filename()) << text << "segmentation_vehicle_ids: \"vehicle_ids_" << env << ".txt\"\n";
+        any = true;
+      }
+      const std::string level = name.substr(2), group = env + "_" + level;
+      if (std::find(columns.begin(), columns.end(), group) == columns.end()) columns.push_back(group);
+      for (const auto& mode : modes)
+        jobs.push_back({group, group, level, mode, bag.string(), (out / "configs" / env / base.filename()).string(),
+                        (out / "runs" / (group + "_" + mode)).string()});
+    }
+  }
+  if (jobs.empty())
+    throw InputError(dir.string(), "holds no VIODE bag (expected <environment>/<k>_<level>.bag with environment "
+                                   "city_day, city_night or parking_lot and k_level 0_none, 1_low, 2_mid or 3_high)");
+  return jobs;
+}
+
 int runBench(const BenchArgs& a) {
-  if (a.suite != "standard") throw CLI::ValidationError("--suite", "only 'standard' exists");
+  if (a.suite != "standard" && a.suite != "viode")
+    throw CLI::ValidationError("--suite", "expected standard or viode, got '" + a.suite + "'");
+  if (a.suite == "viode" && a.data.empty()) throw CLI::ValidationError("--data", "the folder holding VIODE's bags");
   parseSeeds(a.seeds);  // usage errors before any work
   const std::string exe = self();
   const fs::path out(a.out), data = a.data.empty() ? out / "data" : fs::path(a.data), runs = out / "runs";
@@ -305,13 +345,24 @@ int runBench(const BenchArgs& a) {
   if (!a.modes.empty()) modes = parseModes(a.modes);
 
   std::vector<Job> jobs;
-  for (const auto& [name, ds] : simulateMissing(a, exe, data, runs))
-    for (const auto& mode : modes) jobs.push_back({name, mode, ds, (runs / (name + "_" + mode)).string()});
+  std::vector<std::string> columns;
+  if (a.suite == "viode") {
+    jobs = viodeJobs(a, data, out, modes, columns);
+  } else {
+    for (const auto& scene : kScenes)
+      for (const auto& level : kLevels) columns.push_back(scene + "_" + level);
+    for (const auto& [name, ds] : simulateMissing(a, exe, data, runs)) {
+      const std::string group = name.substr(0, name.rfind("_s")), level = group.substr(group.rfind('_') + 1);
+      for (const auto& mode : modes)
+        jobs.push_back({name, group, level, mode, ds, ds + "/config/sim_stereo_imu_config.yaml",
+                        (runs / (name + "_" + mode)).string()});
+    }
+  }
   runJobs(jobs, a, exe);
 
   const Collected c = collect(jobs);
   std::ofstream(out / "results.json") << c.results.dump(1) << "\n";
-  const std::string t1 = table1(c, modes, a.seeds), t2 = table2(c, modes);
+  const std::string t1 = table1(c, modes, a.suite == "viode" ? "" : a.seeds, columns), t2 = table2(c, modes);
   std::ofstream(out / "table1.md") << t1;
   std::ofstream(out / "table2.md") << t2;
   std::ofstream(out / "dynamic.md") << dynamicTable(c.results);
@@ -327,15 +378,20 @@ void registerBench(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<BenchArgs>();
   CLI::App* cmd = app.add_subcommand(
       "bench",
-      "Run the standard benchmark: simulate (or reuse) city and parking_lot x none/low/mid/high for the\n"
-      "given seeds, run every mode (baseline, ransac, seg, idy; --ablations adds idy-pre, idy-ba) in\n"
+      "Run a benchmark suite, every mode (baseline, ransac, seg, idy; --ablations adds idy-pre, idy-ba) in\n"
       "parallel, evaluate, and write OUT/table1.md (ATE, the paper's Table I), OUT/table2.md (timing,\n"
-      "Table II), OUT/dynamic.md (classification, map cleanliness), OUT/results.json and OUT/plots/.");
-  cmd->add_option("--suite", a->suite, "benchmark suite: standard");
+      "Table II), OUT/dynamic.md (classification, map cleanliness), OUT/results.json and OUT/plots/.\n"
+      "standard: simulate (or reuse) city and parking_lot x none/low/mid/high for the given seeds.\n"
+      "viode: VIODE's bags as published under --data: <environment>/<k>_<level>.bag with environment\n"
+      "city_day, city_night, parking_lot and 0_none, 1_low, 2_mid, 3_high (masks from /cam0/segmentation).");
+  cmd->add_option("--suite", a->suite, "benchmark suite: standard (default) or viode");
+  cmd->add_option("--config", a->config,
+                  "viode: the config (its folder is copied per environment with that environment's vehicle\n"
+                  "table; default: the source tree's config/viode/viode_stereo_imu_config.yaml)");
   cmd->add_option("-o,--out", a->out, "output folder")->required();
   cmd->add_option("--seeds", a->seeds, "comma-separated seeds (default 1)");
   cmd->add_option("--duration", a->duration, "seconds per sequence (default 60)");
-  cmd->add_option("--data", a->data, "where the simulated datasets live (default OUT/data)");
+  cmd->add_option("--data", a->data, "standard: where the simulated datasets live (default OUT/data); viode: VIODE's folder");
   cmd->add_option("-j,--jobs", a->jobs, "runs in parallel (default 2)")->check(CLI::Range(1, 64));
   cmd->add_flag("--ablations", a->ablations, "also run idy-pre and idy-ba");
   cmd->add_option("--threads", a->run_threads,
