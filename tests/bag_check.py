@@ -123,6 +123,17 @@ def test_seg(idy, work):
                           shallow=False), "%s: trajectory byte-identical between bag and folder" % mode)
         check(a["classification"] is not None and a["classification"] == b["classification"],
               "%s: classification figures identical (%s)" % (mode, json.dumps(b["classification"])[:120]))
+    # convert writes the masks too: seg on the converted folder, identical again.
+    conv = os.path.join(work, "converted_seg")
+    shutil.rmtree(conv, ignore_errors=True)
+    r = sh([idy, "convert", bag, conv, "-c", cfg, "--groundtruth-topic", "/odometry"])
+    check(r.returncode == 0 and os.path.isdir(os.path.join(conv, "mav0", "cam0", "mask")),
+          "convert writes cam0/mask from the segmentation topic")
+    r = sh([idy, "run", "-c", config(work), "-d", conv, "-o", os.path.join(work, "out_seg_converted"), "--mode", "seg",
+            "--threads", "1"])
+    check(r.returncode == 0 and filecmp.cmp(os.path.join(work, "out_seg_folder", "trajectory.tum"),
+                                            os.path.join(work, "out_seg_converted", "trajectory.tum"), shallow=False),
+          "seg on the converted folder: trajectory byte-identical to the original folder's")
 
 
 def test_viode(idy, work):

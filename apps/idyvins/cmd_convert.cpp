@@ -50,6 +50,11 @@ int runConvert(const ConvertArgs& a) {
   const auto imu = index.dataset.imu;
   const auto groundtruth = index.dataset.groundtruth;
   const std::size_t pairs = index.dataset.pairs.size();
+  // Masks when the config names a segmentation topic the bag has (VIODE): mav0/cam0/mask/.
+  std::optional<io::SegmentationColors> colors;
+  if (config && !index.segmentation.empty())
+    colors = io::readSegmentationColors(config->segmentation_rgb_ids, config->segmentation_vehicle_ids);
+  if (colors) fs::create_directories(mav0 / "cam0" / "mask");
 
   for (const char* cam : {"cam0", "cam1"})
     if (std::string(cam) == "cam0" || stereo) fs::create_directories(mav0 / cam / "data");
@@ -70,7 +75,7 @@ int runConvert(const ConvertArgs& a) {
     io::writeStateCsv((mav0 / "state_groundtruth_estimate0" / "data.csv").string(), groundtruth);
   }
   // Stereo pairs only, both images named by the left stamp (the folder pairs them exactly).
-  io::BagSource source(std::move(index), w, h);
+  io::BagSource source(std::move(index), w, h, colors);
   ProgressBar bar("convert", pairs, "frames");
   std::size_t k = 0;
   while (auto m = source.next()) {
@@ -79,6 +84,7 @@ int runConvert(const ConvertArgs& a) {
     const std::string name = std::to_string(f->t_ns) + ".png";
     writeImage(mav0 / "cam0" / "data" / name, f->left);
     csv0 << f->t_ns << "," << name << "\n";
+    if (colors) writeImage(mav0 / "cam0" / "mask" / name, f->left_mask);
     if (stereo) {
       writeImage(mav0 / "cam1" / "data" / name, f->right);
       csv1 << f->t_ns << "," << name << "\n";
@@ -86,8 +92,9 @@ int runConvert(const ConvertArgs& a) {
     bar.update(++k);
   }
   bar.finish();
-  std::printf("wrote %s: %zu %s frames, %zu IMU samples, %s\n", mav0.string().c_str(), k, stereo ? "stereo" : "mono",
-              imu.size(), groundtruth.empty() ? "no ground truth" : (std::to_string(groundtruth.size()) + " ground-truth states").c_str());
+  std::printf("wrote %s: %zu %s frames%s, %zu IMU samples, %s\n", mav0.string().c_str(), k, stereo ? "stereo" : "mono",
+              colors ? " with masks (cam0/mask)" : "", imu.size(),
+              groundtruth.empty() ? "no ground truth" : (std::to_string(groundtruth.size()) + " ground-truth states").c_str());
   return kOk;
 }
 
@@ -100,7 +107,8 @@ void registerConvert(CLI::App& app, int& exit_code) {
       "Write a ROS1 bag as a EuRoC ASL folder: OUT/mav0/cam0 and cam1 (data.csv and PNGs of the\n"
       "stereo pairs, 8-bit gray, both named by the left stamp), imu0/data.csv, and\n"
       "state_groundtruth_estimate0/data.csv from the ground-truth topic (pose; velocity and\n"
-      "biases zero). `run` gives the same outputs on the bag and on the folder.");
+      "biases zero), and cam0/mask/ (moving-object labels) when the config names a segmentation topic\n"
+      "the bag has. `run` gives the same outputs on the bag and on the folder.");
   cmd->add_option("bag", a->bag, "ROS1 bag")->required();
   cmd->add_option("out", a->out, "output folder (OUT/mav0 must not exist)")->required();
   cmd->add_option("-c,--config", a->config,
