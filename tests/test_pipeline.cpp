@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <sstream>
+
 #include "core/error.h"
 #include "eval/trajectory_metrics.h"
 #include "pipeline/observers.h"
@@ -169,6 +172,27 @@ TEST(PipelineSystem, RejectsConfigsAndFramesItCannotRun) {
   EXPECT_THROW(seg.addFrame(frame), InputError) << "seg mode without a mask";
   EXPECT_THROW((System{sim::rigConfig(o), RunOptions{true, 0}}), std::invalid_argument)
       << "a pipelined run has a feedback delay of one frame";
+}
+
+TEST(StatsRecorder, WritesOneLinePerFrameAndAParseableDocument) {
+  for (const int n : {0, 1, 3}) {
+    std::ostringstream os;
+    StatsRecorder stats(os);
+    for (int k = 0; k < n; ++k) {
+      FrameOutput out;
+      out.estimate.t_ns = 100 + k;
+      stats.onFrame(StereoFrame{}, out);
+    }
+    stats.finish({{"frames", n}, {"nested", {{"a", 1}}}});
+    const nlohmann::json doc = nlohmann::json::parse(os.str());
+    ASSERT_EQ(doc["frames"].size(), static_cast<std::size_t>(n)) << os.str();
+    for (int k = 0; k < n; ++k) EXPECT_EQ(doc["frames"][k]["t_ns"], 100 + k);
+    EXPECT_EQ(doc["summary"]["nested"]["a"], 1);
+    EXPECT_EQ(stats.frames(), static_cast<std::size_t>(n));
+    // One line per frame, plus the document's own: 3 around the array, 5 of the summary, 2 closing.
+    const std::string text = os.str();
+    EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), n ? n + 10 : 9) << text;
+  }
 }
 
 }  // namespace

@@ -60,9 +60,16 @@ std::pair<int, int> validateImages(const io::EurocDataset& ds, int width, int he
 }
 
 /// Decodes every image of every stereo pair of a bag; returns the image size.
-std::pair<int, int> validateBagImages(io::BagIndex index, int width, int height) {
+std::pair<int, int> validateBagImages(const io::BagIndex& index, int width, int height) {
   const std::size_t total = index.dataset.pairs.size();
-  io::BagSource source(std::move(index), width, height);
+  // The source needs the image stamps only: no copy of the IMU and the ground truth.
+  io::BagIndex images{index.path, index.topics, index.all_topics, {}, index.segmentation, index.segmentation_of_pair};
+  const io::EurocDataset& d = index.dataset;
+  images.dataset.root = d.root;
+  images.dataset.cam0 = d.cam0;
+  images.dataset.cam1 = d.cam1;
+  images.dataset.pairs = d.pairs;
+  io::BagSource source(std::move(images), width, height);
   ProgressBar bar("checking images", total, "pairs");
   std::size_t k = 0;
   std::pair<int, int> size{width, height};
@@ -91,7 +98,9 @@ int runInfo(const InfoArgs& args) {
   if (io::isBagFile(args.dataset))
     bag = io::indexBag(args.dataset, defaultBagTopics(config, args.groundtruth_topic),
                        config ? config->image_width : 0, config ? config->image_height : 0);
-  const io::EurocDataset ds = bag ? bag->dataset : io::readEurocDataset(args.dataset);
+  io::EurocDataset folder;
+  if (!bag) folder = io::readEurocDataset(args.dataset);
+  const io::EurocDataset& ds = bag ? bag->dataset : folder;  // no copy of a long bag's index
   const io::DatasetSummary s = io::summarize(ds);
   if (config && config->num_cam == 2 && !ds.stereo())
     throw InputError(ds.root, "config asks for 2 cameras but the dataset has no cam1/");

@@ -219,8 +219,12 @@ int runRun(const RunArgs& a) {
   if (ec) throw InputError(a.out, "cannot create output folder: " + ec.message());
 
   const std::size_t total = a.max_frames ? std::min(a.max_frames, in.source->frameCount()) : in.source->frameCount();
-  pipeline::ObservationRecorder observations(in.has_masks);
-  pipeline::StatsRecorder stats;
+  pipeline::ObservationRecorder observations(in.has_masks, /*keep_observations=*/!a.dump_observations.empty());
+  // stats.json is written while the run goes (one line per frame) and renamed when complete.
+  const std::string stats_path = a.out + "/stats.json", stats_part = stats_path + ".part";
+  std::ofstream stats_file(stats_part);
+  if (!stats_file) throw InputError(stats_part, "cannot write file");
+  pipeline::StatsRecorder stats(stats_file);
   ProgressObserver progress(system.mode(), total);
   if (in.has_masks || !a.dump_observations.empty()) system.addObserver(observations);
   system.addObserver(stats);
@@ -239,8 +243,11 @@ int runRun(const RunArgs& a) {
   if (!a.dump_observations.empty()) observations.writeCsv(a.dump_observations, result);
   writeFiles(a.out, result);
   addAte(summary, in.groundtruth, result);
-  std::ofstream(a.out + "/stats.json") << nlohmann::json{{"summary", summary}, {"frames", stats.frames()}}.dump(1)
-                                       << "\n";
+  stats.finish(summary);
+  stats_file.close();
+  if (!stats_file) throw InputError(stats_part, "write failed");
+  std::filesystem::rename(stats_part, stats_path, ec);
+  if (ec) throw InputError(stats_path, "cannot rename " + stats_part + ": " + ec.message());
   summary["last_status"] = result.summary.last_status;
   printSummary(summary, a.out);
   return kOk;

@@ -8,35 +8,39 @@ namespace {
 double ratio(std::size_t a, std::size_t b) { return b ? static_cast<double>(a) / static_cast<double>(b) : 0.0; }
 }  // namespace
 
+void addObservation(std::unordered_map<std::uint64_t, TrackCounts>& tracks, const MaskedObservation& o) {
+  TrackCounts& t = tracks[o.id];
+  ++t.observations;
+  t.on_moving += o.on_moving;
+  t.eliminated = t.eliminated || o.eliminated;
+}
+
 DynamicClassification classifyDynamic(const std::vector<MaskedObservation>& observations,
                                       const std::unordered_set<std::uint64_t>& confirmed_ids,
                                       const std::vector<std::uint64_t>& static_map_ids) {
-  struct Track {
-    std::size_t observations = 0, on_moving = 0;
-    bool eliminated = false;
-  };
-  std::unordered_map<std::uint64_t, Track> tracks;
-  for (const auto& o : observations) {
-    Track& t = tracks[o.id];
-    ++t.observations;
-    t.on_moving += o.on_moving;
-    t.eliminated = t.eliminated || o.eliminated;
-  }
+  std::unordered_map<std::uint64_t, TrackCounts> tracks;
+  for (const auto& o : observations) addObservation(tracks, o);
+  return classifyTracks(tracks, confirmed_ids, static_map_ids);
+}
+
+DynamicClassification classifyTracks(const std::unordered_map<std::uint64_t, TrackCounts>& tracks,
+                                     const std::unordered_set<std::uint64_t>& confirmed_ids,
+                                     const std::vector<std::uint64_t>& static_map_ids) {
+  // Every observation of a track shares its verdict: count them per track.
   DynamicClassification c;
   std::size_t tp_tracked = 0;
-  for (const auto& o : observations) {
-    const Track& t = tracks[o.id];
-    const bool flagged = t.eliminated || confirmed_ids.count(o.id);
-    if (o.on_moving) {
-      ++c.observations_on_moving;
-      c.true_positives += flagged;
-      if (t.observations >= 2) {
-        ++c.observations_on_moving_tracked;
-        tp_tracked += flagged;
-      }
-    } else {
-      ++c.observations_static;
-      c.false_positives += flagged;
+  for (const auto& [id, t] : tracks) {
+    const bool flagged = t.eliminated || confirmed_ids.count(id);
+    const std::size_t on_static = t.observations - t.on_moving;
+    c.observations_on_moving += t.on_moving;
+    c.observations_static += on_static;
+    if (flagged) {
+      c.true_positives += t.on_moving;
+      c.false_positives += on_static;
+    }
+    if (t.observations >= 2) {
+      c.observations_on_moving_tracked += t.on_moving;
+      if (flagged) tp_tracked += t.on_moving;
     }
   }
   c.recall = ratio(c.true_positives, c.observations_on_moving);

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <unordered_map>
 #include <unordered_set>
 #include <vector>
 
@@ -34,6 +35,23 @@ struct DynamicClassification {
   std::size_t static_map_ever_on_moving = 0;  ///< at least one observation on a moving object
   double static_map_fraction_on_moving = 0, static_map_fraction_ever_on_moving = 0;
 };
+
+/// What the classification needs of one track: how many observations it has, how many
+/// of them the masks put on a moving object, and whether it was eliminated at any of them.
+/// A run keeps one of these per track instead of one record per observation.
+struct TrackCounts {
+  std::size_t observations = 0, on_moving = 0;
+  bool eliminated = false;
+};
+
+/// Adds one observation to its track's counts.
+void addObservation(std::unordered_map<std::uint64_t, TrackCounts>& tracks, const MaskedObservation& o);
+
+/// The classification from per-track counts; equal to classifyDynamic over the
+/// observations the counts were made from.
+DynamicClassification classifyTracks(const std::unordered_map<std::uint64_t, TrackCounts>& tracks,
+                                     const std::unordered_set<std::uint64_t>& confirmed_ids,
+                                     const std::vector<std::uint64_t>& static_map_ids);
 
 /// Labels belong to landmarks (DESIGN §4.4): an observation counts as flagged dynamic
 /// when its track was eliminated (at any observation) or confirmed dynamic.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <stdexcept>
 
 #include "core/error.h"
 
@@ -34,9 +35,13 @@ void ObservationRecorder::onFrame(const StereoFrame& input, const FrameOutput& o
   };
   const float cred = output.idy ? static_cast<float>(output.idy->credibility) : 0.f;
   auto record = [&](const frontend::Feature& f) {
-    observations_.push_back({f.id, on_moving(f), output.t_ns, static_cast<float>(f.uv.x()),
-                             static_cast<float>(f.uv.y()), static_cast<float>(f.score), cred,
-                             static_cast<float>(f.stereo_chi2), f.label, f.track_length});
+    const bool moving = on_moving(f);
+    ++observations_seen_;
+    eval::addObservation(tracks_, {f.id, moving, f.label == frontend::FeatureLabel::kEliminated});
+    if (keep_observations_)
+      observations_.push_back({f.id, moving, output.t_ns, static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y()),
+                               static_cast<float>(f.score), cred, static_cast<float>(f.stereo_chi2), f.label,
+                               f.track_length});
   };
   for (const auto& f : output.features.features) record(f);
   for (const auto& f : output.features.removed) record(f);  // label kEliminated
@@ -47,20 +52,19 @@ void ObservationRecorder::onFrame(const StereoFrame& input, const FrameOutput& o
 void ObservationRecorder::relabelLostMoving() {
   for (auto& o : observations_)
     if (lost_moving_ids_.count(o.id)) o.label = frontend::FeatureLabel::kEliminated;
+  for (const auto id : lost_moving_ids_)
+    if (const auto it = tracks_.find(id); it != tracks_.end()) it->second.eliminated = true;
 }
 
 eval::DynamicClassification ObservationRecorder::classify(const Result& result) {
   relabelLostMoving();
-  std::vector<eval::MaskedObservation> masked;
-  masked.reserve(observations_.size());
-  for (const auto& o : observations_)
-    masked.push_back({o.id, o.on_moving, o.label == frontend::FeatureLabel::kEliminated});
   std::vector<std::uint64_t> static_ids;
   for (const auto& p : result.static_map) static_ids.push_back(p.id);
-  return eval::classifyDynamic(masked, confirmedIds(result), static_ids);
+  return eval::classifyTracks(tracks_, confirmedIds(result), static_ids);
 }
 
 void ObservationRecorder::writeCsv(const std::string& path, const Result& result) {
+  if (!keep_observations_) throw std::logic_error("ObservationRecorder::writeCsv needs keep_observations");
   relabelLostMoving();
   const std::unordered_set<std::uint64_t> confirmed = confirmedIds(result);
   std::unordered_set<std::uint64_t> in_static;
@@ -93,7 +97,19 @@ nlohmann::json toJson(const eval::DynamicClassification& c) {
           {"static_map_fraction_ever_on_moving", c.static_map_fraction_ever_on_moving}};
 }
 
+StatsRecorder::StatsRecorder(std::ostream& out) : out_(out) { out_ << "{\n \"frames\": ["; }
+
 void StatsRecorder::onFrame(const StereoFrame&, const FrameOutput& out) {
+  out_ << (frames_++ ? ",\n  " : "\n  ") << frameJson(out).dump();
+}
+
+void StatsRecorder::finish(const nlohmann::json& summary) {
+  std::string s = summary.dump(1);
+  for (std::size_t pos = s.find('\n'); pos != std::string::npos; pos = s.find('\n', pos + 2)) s.insert(pos + 1, " ");
+  out_ << (frames_ ? "\n ],\n" : "],\n") << " \"summary\": " << s << "\n}\n";
+}
+
+nlohmann::json StatsRecorder::frameJson(const FrameOutput& out) {
   const frontend::FeatureFrame& ff = out.features;
   const backend::FrameResult& r = out.estimate;
   nlohmann::json dyn = nullptr;
@@ -118,7 +134,7 @@ void StatsRecorder::onFrame(const StereoFrame&, const FrameOutput& out) {
            {"lost_moving", ff.lost_moving.size()},
            {"cleared", r.cleared}};
   }
-  frames_.push_back({{"t_ns", r.t_ns},
+  return {{"t_ns", r.t_ns},
                      {"dynamic", dyn},
                      {"tracking_ms", ff.tracking_ms},
                      {"filter_ms", ff.filter_ms},
@@ -130,7 +146,7 @@ void StatsRecorder::onFrame(const StereoFrame&, const FrameOutput& out) {
                      {"landmarks", r.landmarks},
                      {"keyframe", r.keyframe},
                      {"initialized", r.initialized},
-                     {"status", r.status}});
+                     {"status", r.status}};
 }
 
 bool isTimingField(const std::string& key) {
