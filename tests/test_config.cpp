@@ -204,6 +204,26 @@ TEST(Config, UnknownCameraModel) {
   expectError([&] { loadConfig(path); }, "cam.yaml:3: unknown camera model 'MEI'");
 }
 
+TEST(Config, TrackerImageKeys) {
+  TempDir dir;
+  const Config plain = loadConfig(writeConfig(dir, kConfig, kCamera));
+  EXPECT_FALSE(plain.tracker.equalize);
+  EXPECT_TRUE(plain.tracker.stereo_gain_compensation);
+  EXPECT_DOUBLE_EQ(plain.tracker.stereo_epipolar_px, 2.0);
+  const Config set = loadConfig(writeConfig(
+      dir, std::string(kConfig) + "equalize: 1\nstereo_gain_compensation: 0\nstereo_epipolar_px: 1.0\n", kCamera));
+  EXPECT_TRUE(set.tracker.equalize);
+  EXPECT_FALSE(set.tracker.stereo_gain_compensation);
+  EXPECT_DOUBLE_EQ(set.tracker.stereo_epipolar_px, 1.0);
+  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_epipolar_px: 0\n", kCamera)); },
+              "stereo_epipolar_px");
+  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "equalize: clahe\n", kCamera)); },
+              "equalize");
+  const Config euroc = loadConfig(std::string(IDYVINS_SOURCE_DIR) + "/config/euroc/euroc_stereo_imu_config.yaml");
+  EXPECT_TRUE(euroc.tracker.equalize) << "measured on the real excerpt (test_frontend)";
+  EXPECT_DOUBLE_EQ(euroc.tracker.stereo_epipolar_px, 1.0);
+}
+
 TEST(Config, BadValuesNameKeyAndLine) {
   TempDir dir;
   auto path = writeConfig(dir, replace(kConfig, "max_cnt: 150", "max_cnt: lots"), kCamera);

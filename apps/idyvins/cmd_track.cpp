@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "core/error.h"
 #include "frontend/feature_tracker.h"
+#include "frontend/track_quality.h"
 #include "pipeline/front_end.h"
 #include "io/config.h"
 #include "io/data_source.h"
@@ -36,6 +37,7 @@ int runTrack(const TrackArgs& a) {
   const std::size_t total = a.max_frames ? std::min(a.max_frames, source.frameCount()) : source.frameCount();
   ProgressBar bar("track", total, "frames");
   std::size_t frames = 0, features = 0, stereo = 0, removed = 0;
+  frontend::TrackQuality quality(config);
   double ms = 0, filter_ms = 0;
   while (frames < total) {
     auto m = source.next();
@@ -46,6 +48,7 @@ int runTrack(const TrackArgs& a) {
     ++frames;
     features += out.features.size();
     for (const auto& ft : out.features) stereo += ft.has_right;
+    quality.add(out);
     removed += out.removed.size();
     ms += out.tracking_ms;
     filter_ms += out.filter_ms;
@@ -61,6 +64,11 @@ int runTrack(const TrackArgs& a) {
               "tracking %.2f ms/frame, filter %.3f ms/frame\n",
               frames, a.mode.c_str(), static_cast<double>(features) / frames, 100.0 * stereo / std::max<std::size_t>(features, 1),
               static_cast<double>(removed) / frames, ms / frames, filter_ms / frames);
+  const frontend::TrackQualitySummary q = quality.summary();
+  if (q.with_right)
+    std::printf("right matches: distance to the epipolar line median %.2f px, p99 %.2f px (calibrated extrinsics)\n",
+                q.epipolar_median_px, q.epipolar_p99_px);
+  std::printf("tracks: %zu, median length %.0f frames\n", q.tracks, q.track_length_median);
   return kOk;
 }
 
@@ -71,7 +79,8 @@ void registerTrack(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "track",
       "Run the front end alone (stereo KLT tracker with the baseline, ransac or seg rejection)\n"
-      "on a EuRoC folder; print feature counts and timing; optionally save images with the\n"
+      "on a EuRoC folder; print feature counts, the share with a right-image match and their\n"
+      "distance to the epipolar line, track lengths and timing; optionally save images with the\n"
       "tracks drawn (green kept, yellow dynamic candidates, red removed).");
   cmd->add_option("-c,--config", a->config, "VINS-Fusion config")->required();
   cmd->add_option("-d,--dataset", a->dataset, "EuRoC folder")->required();

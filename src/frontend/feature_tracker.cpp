@@ -39,6 +39,19 @@ FeatureTracker::FeatureTracker(const Config& config, const TrackerParams& params
     T_c1_c0_ = config.T_b_c[1].inverse() * config.T_b_c[0];
     E_c1_c0_ = hat(T_c1_c0_.translation()) * T_c1_c0_.linear();
   }
+  if (config.tracker.equalize) clahe_ = cv::createCLAHE(3.0, cv::Size(8, 8));  // VINS-Mono's setting
+}
+
+cv::Mat matchBrightness(const cv::Mat& image, const cv::Mat& reference, double tolerance) {
+  cv::Scalar mean_i, std_i, mean_r, std_r;
+  cv::meanStdDev(image, mean_i, std_i);
+  cv::meanStdDev(reference, mean_r, std_r);
+  if (std_i[0] < 1e-6 || mean_r[0] < 1e-6) return image;  // flat image: nothing to match
+  const double a = std_r[0] / std_i[0], b = mean_r[0] - a * mean_i[0];
+  if (std::abs(a - 1.0) <= tolerance && std::abs(mean_i[0] / mean_r[0] - 1.0) <= tolerance) return image;
+  cv::Mat out;
+  image.convertTo(out, CV_8U, a, b);
+  return out;
 }
 
 Feature FeatureTracker::featureOf(const Track& t, FeatureLabel label) {
@@ -345,7 +358,7 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
     const Eigen::Vector3d x0(feat.xy.x(), feat.xy.y(), 1.0), x1(xy_r.x(), xy_r.y(), 1.0);
     const Eigen::Vector3d line = E_c1_c0_ * x0;
     const double dist = std::abs(x1.dot(line)) / std::max(line.head<2>().norm(), 1e-12);
-    if (dist * f > params_.stereo_epipolar_px) continue;
+    if (dist * f > config_.tracker.stereo_epipolar_px) continue;
     if (params_.stereo_min_zncc > -1.0 &&
         patchZncc(left_pyr[0], feat.uv, right_pyr[0], toEigen(pr[i]), params_.patch_half) < params_.stereo_min_zncc)
       continue;
@@ -355,9 +368,14 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
   }
 }
 
-FeatureFrame FeatureTracker::track(const StereoFrame& frame, const MotionPrior& prior, FeatureFilter* filter,
+FeatureFrame FeatureTracker::track(const StereoFrame& input, const MotionPrior& prior, FeatureFilter* filter,
                                    const cv::Mat* mask) {
   const auto start = Clock::now();
+  StereoFrame frame = input;  // images are reference-counted: no copy unless equalized
+  if (clahe_) {
+    clahe_->apply(input.left, frame.left);
+    if (!input.right.empty()) clahe_->apply(input.right, frame.right);
+  }
   FrameWork w{FeatureFrame{}, filter, FilterContext{cams_[0].get(), &prior, mask, prev_t_ns_, frame.t_ns}, {}, 0.0};
   w.out.t_ns = frame.t_ns;
   buildPyramids(frame);
@@ -401,7 +419,11 @@ void FeatureTracker::buildPyramids(const StereoFrame& frame) {
   // Right pyramid first: tracked features are matched in the right image before the
   // filter (a filter may compare stereo observations of consecutive frames).
   has_right_image_ = !frame.right.empty() && cams_.size() >= 2;
-  if (has_right_image_) cv::buildOpticalFlowPyramid(frame.right, right_pyr_, window, params_.klt_levels);
+  if (has_right_image_) {
+    const cv::Mat right =
+        config_.tracker.stereo_gain_compensation ? matchBrightness(frame.right, frame.left) : frame.right;
+    cv::buildOpticalFlowPyramid(right, right_pyr_, window, params_.klt_levels);
+  }
 }
 
 std::vector<FeatureTracker::Track> FeatureTracker::separateFollowed(std::vector<Track>& tracks,

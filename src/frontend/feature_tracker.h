@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <opencv2/core/mat.hpp>
+#include <opencv2/imgproc.hpp>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -35,7 +36,6 @@ struct TrackerParams {
   int klt_iterations = 30;     ///< KLT stops after this many iterations ...
   double klt_epsilon = 0.01;   ///< ... or when the update is below this (px)
   double flow_back_px = 0.5;       ///< max forward-backward distance
-  double stereo_epipolar_px = 2.0; ///< max distance of a right match to its epipolar line
   /// A right match whose patch correlates worse than this with the left one (ZNCC of the
   /// patch_half patches) is dropped. Measured on city high: it drops 4 % of the static
   /// corners' matches, 2.8x as often wrong (> 1 px or hidden) and 1.9x as often beside a
@@ -69,6 +69,12 @@ struct TrackerParams {
   double min_patch_zncc = 0.8;        ///< below: the track is dropped
   double max_patch_correction_px = 2.0;  ///< KLT and alignment disagree by more: dropped
 };
+
+/// `image` with its brightness mapped to `reference`'s: I' = a I + b with a and b such that
+/// the mean and standard deviation equal the reference's (8-bit, saturated). Returns
+/// `image` itself (no copy) when the standard deviations and the means already agree
+/// within `tolerance` (relative).
+cv::Mat matchBrightness(const cv::Mat& image, const cv::Mat& reference, double tolerance = 0.01);
 
 /// Tracks features across stereo frames; one instance per sequence.
 class FeatureTracker {
@@ -164,6 +170,7 @@ class FeatureTracker {
 
   Config config_;
   TrackerParams params_;
+  cv::Ptr<cv::CLAHE> clahe_;  ///< config.tracker.equalize
   std::vector<std::unique_ptr<camera::CameraModel>> cams_;
   Eigen::Matrix3d E_c1_c0_;  ///< essential matrix: x1ᵀ E x0 = 0
   Eigen::Isometry3d T_c1_c0_ = Eigen::Isometry3d::Identity();

@@ -222,6 +222,11 @@ void readImuTrackerSolver(const YamlFile& f, Config& c) {
   c.tracker.min_dist = getDouble(f, f.root, "min_dist", "pixels between features");
   c.tracker.f_threshold = getDouble(f, f.root, "F_threshold", "RANSAC threshold, pixels");
   c.tracker.flow_back = getInt(f, f.root, "flow_back", "0 or 1") != 0;
+  if (f.root["equalize"]) c.tracker.equalize = getInt(f, f.root, "equalize", "0 or 1") != 0;
+  if (f.root["stereo_gain_compensation"])
+    c.tracker.stereo_gain_compensation = getInt(f, f.root, "stereo_gain_compensation", "0 or 1") != 0;
+  c.tracker.stereo_epipolar_px = getDoubleOr(f, "stereo_epipolar_px", c.tracker.stereo_epipolar_px);
+  checkPositive(f, "stereo_epipolar_px", c.tracker.stereo_epipolar_px);
   c.solver.max_solver_time_s = getDouble(f, f.root, "max_solver_time", "seconds per solve");
   c.solver.max_num_iterations = getInt(f, f.root, "max_num_iterations", "solver iterations");
   c.solver.keyframe_parallax_px = getDouble(f, f.root, "keyframe_parallax", "pixels");
@@ -329,7 +334,9 @@ std::string describe(const Config& c) {
     o << "  imu noise: acc_n " << c.imu.acc_n << ", gyr_n " << c.imu.gyr_n << ", acc_w "
       << c.imu.acc_w << ", gyr_w " << c.imu.gyr_w << ", g_norm " << c.imu.g_norm << "\n";
   o << "  tracker: max_cnt " << c.tracker.max_cnt << ", min_dist " << c.tracker.min_dist
-    << ", F_threshold " << c.tracker.f_threshold << ", flow_back " << c.tracker.flow_back << "\n";
+    << ", F_threshold " << c.tracker.f_threshold << ", flow_back " << c.tracker.flow_back << ", equalize "
+    << c.tracker.equalize << ", stereo_gain_compensation " << c.tracker.stereo_gain_compensation
+    << ", stereo_epipolar_px " << c.tracker.stereo_epipolar_px << "\n";
   o << "  solver: max_num_iterations " << c.solver.max_num_iterations << ", max_solver_time "
     << c.solver.max_solver_time_s << " s ("
     << (c.solver.time_limited ? "applied: solver_time_limit 1, results depend on load" : "not applied: deterministic")
