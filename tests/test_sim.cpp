@@ -14,6 +14,8 @@
 #include "io/config.h"
 #include "io/euroc_dataset.h"
 #include "sim/renderer.h"
+#include "eval/image_stats.h"
+#include "sim/camera_effects.h"
 #include "sim/simulator.h"
 #include "test_util.h"
 
@@ -263,6 +265,181 @@ TEST(SimRenderer, MaskMatchesTheProjectedVehicleBox) {
   ASSERT_GT(expected, 2000);
   EXPECT_LE(mismatched, expected / 1000);  // boundary pixels only
   EXPECT_EQ(cv::countNonZero(r.mask), cv::countNonZero(r.mask == 7));
+}
+
+constexpr std::uint64_t kTodayLeftHash = 8175068048370894342ull, kTodayRightHash = 14836506294586362930ull;
+
+/// FNV-1a over an image's bytes.
+std::uint64_t imageHash(const cv::Mat& m) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (int y = 0; y < m.rows; ++y)
+    for (int x = 0; x < m.cols * static_cast<int>(m.elemSize()); ++x) h = (h ^ m.ptr<std::uint8_t>(y)[x]) * 1099511628211ull;
+  return h;
+}
+
+TEST(SimRealism, NoneRendersTodaysImagesByteForByte) {
+  // Hashes of city high seed 2, frame 3, taken before camera realism existed (the images
+  // of 37ab0b1 and earlier); realism none must keep them.
+  SimOptions o;
+  o.scene.scene = "city";
+  o.scene.level = Level::kHigh;
+  o.scene.seed = 2;
+  o.duration_s = 1.0;
+  o.realism = realismPreset("none");
+  const Scene scene(o);
+  const SceneFrame f = scene.renderFrame(3);
+  EXPECT_EQ(imageHash(f.cam[0].image), kTodayLeftHash) << std::hex << imageHash(f.cam[0].image);
+  EXPECT_EQ(imageHash(f.cam[1].image), kTodayRightHash) << std::hex << imageHash(f.cam[1].image);
+}
+
+TEST(SimRealism, VignettingOfAFlatFieldEqualsTheModel) {
+  RealismOptions o;
+  o.enabled = true;
+  o.vignetting_k1 = -0.35;
+  o.vignetting_k2 = 0.05;
+  const int W = 752, H = 480;
+  const cv::Mat v = vignettingProfile(W, H, 0.5 * (W - 1), 0.5 * (H - 1), o.vignetting_k1, o.vignetting_k2);
+  const cv::Mat flat(H, W, CV_32F, cv::Scalar(200.0));
+  const cv::Mat img = applySensor(flat, v, 1.0, 0, o, 1);
+  // Pixel by pixel: 200 V(r), rounded.
+  for (const auto& [x, y] : std::vector<std::pair<int, int>>{{375, 239}, {0, 0}, {751, 479}, {100, 300}, {600, 50}}) {
+    const double r2 = ((x - 375.5) * (x - 375.5) + (y - 239.5) * (y - 239.5)) / (0.25 * (W * W + H * H));
+    EXPECT_NEAR(img.at<std::uint8_t>(y, x), 200.0 * (1 + o.vignetting_k1 * r2 + o.vignetting_k2 * r2 * r2), 0.5001)
+        << x << "," << y;
+  }
+  // The ring profile the image statistics measure, against the model's ring means.
+  const eval::ImageFigures fig = eval::imageFigures(img, 30);
+  for (int ring = 1; ring < eval::kVignettingRings; ++ring) {
+    double model = 0;
+    int n = 0;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        const double r = std::hypot(x - 375.5, y - 239.5) / (0.5 * std::hypot(W, H));
+        if (std::min(eval::kVignettingRings - 1, static_cast<int>(r * eval::kVignettingRings)) != ring) continue;
+        model += 1 + o.vignetting_k1 * r * r + o.vignetting_k2 * r * r * r * r;
+        ++n;
+      }
+    double centre = 0;
+    int nc = 0;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        const double r = std::hypot(x - 375.5, y - 239.5) / (0.5 * std::hypot(W, H));
+        if (r * eval::kVignettingRings >= 1) continue;
+        centre += 1 + o.vignetting_k1 * r * r + o.vignetting_k2 * r * r * r * r;
+        ++nc;
+      }
+    EXPECT_NEAR(fig.ring_mean[ring] / fig.ring_mean[0], (model / n) / (centre / nc), 0.005) << "ring " << ring;
+  }
+}
+
+TEST(SimRealism, LeftRightGainRatioIsTheConfiguredOne) {
+  RealismOptions o;
+  o.enabled = true;
+  o.gain[1] = 0.8;
+  cv::Mat radiance(120, 160, CV_32F);
+  cv::RNG rng(5);
+  rng.fill(radiance, cv::RNG::UNIFORM, 30.0, 220.0);
+  const cv::Mat left = applySensor(radiance, {}, 1.0, 0, o, 1), right = applySensor(radiance, {}, 1.0, 1, o, 2);
+  EXPECT_NEAR(cv::mean(right)[0] / cv::mean(left)[0], 0.8, 0.002);
+  // With shot and read noise the means keep the ratio (noise is zero-mean).
+  o.full_well = 6000;
+  o.read_noise = 1.5;
+  const cv::Mat nl = applySensor(radiance, {}, 1.0, 0, o, 3), nr = applySensor(radiance, {}, 1.0, 1, o, 4);
+  EXPECT_NEAR(cv::mean(nr)[0] / cv::mean(nl)[0], 0.8, 0.005);
+  // The noise has the configured variance: shot σ² = I·255/full_well plus read σ².
+  cv::Mat diff;
+  cv::Mat(nl).convertTo(diff, CV_32F);
+  cv::Mat clean;
+  left.convertTo(clean, CV_32F);
+  diff -= clean;
+  cv::Scalar mean_d, std_d;
+  cv::meanStdDev(diff, mean_d, std_d);
+  const double expected = std::sqrt(cv::mean(radiance)[0] * 255.0 / 6000 + 1.5 * 1.5 + 1.0 / 6.0);  // + rounding
+  EXPECT_NEAR(std_d[0], expected, 0.1 * expected);
+}
+
+TEST(SimRealism, AutoExposureMovesTowardTheTargetAndStaysWithinItsLimits) {
+  RealismOptions o;
+  o.auto_exposure = true;
+  o.ae_target = 128;
+  o.ae_rate = 0.5;
+  std::vector<double> meter(40, 64.0);  // a dark scene, then a bright one
+  for (std::size_t k = 20; k < meter.size(); ++k) meter[k] = 256.0;
+  const std::vector<double> e = autoExposureSequence(meter, o);
+  EXPECT_NEAR(e[0], 2.0, 1e-12) << "starts converged";
+  EXPECT_NEAR(e[19], 2.0, 1e-12);
+  EXPECT_LT(e[21], 2.0);
+  EXPECT_GT(e[21], 0.5) << "moves part of the way only";
+  EXPECT_NEAR(e.back(), 0.5, 1e-3) << "converged on the bright scene";
+  for (double x : e) EXPECT_TRUE(x >= o.ae_min && x <= o.ae_max);
+  o.ae_max = 1.5;
+  EXPECT_NEAR(autoExposureSequence(meter, o)[0], 1.5, 1e-12) << "clamped";
+}
+
+TEST(SimRealism, MotionBlurLengthIsImageSpeedTimesExposure) {
+  SimOptions o;
+  o.scene.scene = "city";
+  o.scene.level = Level::kNone;
+  o.scene.seed = 1;
+  o.duration_s = 2.0;
+  o.image_noise_sigma = 0;
+  o.realism.enabled = true;
+  o.realism.exposure_time_s = 0.1;
+  o.realism.blur_samples = 41;
+  const std::size_t k = 20;
+  const double t = 1.0;
+  const Trajectory traj(o.scene.scene, o.scene.seed, o.g_norm);
+  const Config rig = rigConfig(o);
+  auto T_w_c = [&](double time) {
+    const BodyState b = traj.at(time);
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = b.q_w_b.toRotationMatrix();
+    T.translation() = b.p_w_b;
+    return T * rig.T_b_c[0];
+  };
+  // One small bright square 5 m in front of the left camera at the frame's time, nothing else.
+  const Eigen::Isometry3d T0 = T_w_c(t);
+  const double side = 0.05;
+  auto scene_with_dot = [&](const SimOptions& opts) {
+    return std::make_unique<Scene>(opts, [&](World& w, const TextureBank& tex) {
+      w.statics.clear();
+      w.markers.clear();
+      w.vehicles.clear();
+      w.sky = false;
+      Quad q;
+      q.origin = T0 * Vector3d(-side / 2, -side / 2, 5.0);
+      q.u = T0.linear() * Vector3d::UnitX();
+      q.v = T0.linear() * Vector3d::UnitY();
+      q.width = q.height = side;
+      q.texture = tex.index(TextureKind::kChecker, 0);
+      q.tex_offset_s = tex.checkerSquare() * 1.25;  // inside a bright square
+      q.tex_offset_t = tex.checkerSquare() * 0.25;
+      q.two_sided = true;
+      w.statics.push_back(q);
+    });
+  };
+  auto extent = [](const cv::Mat& img) {
+    cv::Mat bright = img > 25;  // background 20
+    std::vector<cv::Point> pts;
+    cv::findNonZero(bright, pts);
+    return cv::boundingRect(pts);
+  };
+  SimOptions sharp_opts = o;
+  sharp_opts.realism.exposure_time_s = 0;
+  const cv::Rect sharp = extent(scene_with_dot(sharp_opts)->renderFrame(k).cam[0].image);
+  const cv::Rect blurred = extent(scene_with_dot(o)->renderFrame(k).cam[0].image);
+  // Where the square's centre projects at the start and the end of the exposure.
+  const auto cam = camera::makeCamera(rig.cams[0]);
+  const Vector3d centre_w = T0 * Vector3d(0, 0, 5.0);
+  Vector2d uv_start, uv_end;
+  ASSERT_TRUE(cam->project(T_w_c(t - 0.05).inverse() * centre_w, uv_start));
+  ASSERT_TRUE(cam->project(T_w_c(t + 0.05).inverse() * centre_w, uv_end));
+  const Vector2d streak = uv_end - uv_start;
+  ASSERT_GT(streak.norm(), 8.0) << "the test needs a clearly visible streak";
+  std::printf("streak %.1f x %.1f px; sharp %dx%d, blurred %dx%d\n", streak.x(), streak.y(), sharp.width,
+              sharp.height, blurred.width, blurred.height);
+  EXPECT_NEAR(blurred.width - sharp.width, std::abs(streak.x()), 1.5);
+  EXPECT_NEAR(blurred.height - sharp.height, std::abs(streak.y()), 1.5);
 }
 
 }  // namespace

@@ -21,6 +21,7 @@ struct SimulateArgs {
   int threads = 2;
   bool opening_vehicle = false, standard_set = false;
   std::string format = "euroc", compression = "none", viode_tables = IDYVINS_VIODE_TABLES;
+  std::string realism = "none";
 };
 
 /// VIODE's file name for a traffic level (0_none .. 3_high).
@@ -68,6 +69,7 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
   o.duration_s = a.duration;
   o.imu.scale = a.noise;
   o.image_noise_sigma = a.image_noise;
+  o.realism = sim::realismPreset(a.realism);
   o.threads = a.threads;
   ProgressBar bar("simulate " + scene + " " + level, 0, "frames");
   std::size_t total = 0;
@@ -124,7 +126,13 @@ void registerSimulate(CLI::App& app, int& exit_code) {
   cmd->add_option("--duration", a->duration, "seconds of data");
   cmd->add_option("-o,--out", a->out, "output folder (with --standard-set: the parent folder)")->required();
   cmd->add_option("--noise", a->noise, "IMU noise scale (0 = perfect IMU, 1 = ADIS16448-like)");
-  cmd->add_option("--image-noise", a->image_noise, "pixel noise sigma, gray levels");
+  cmd->add_option("--image-noise", a->image_noise, "pixel noise sigma, gray levels (with --realism none)");
+  cmd->add_option("--realism", a->realism,
+                  "camera realism: none (default: today's images) | euroc (vignetting, right camera 10 %\n"
+                  "darker, auto-exposure, 6 ms motion blur along the true trajectory, defocus, shot and read\n"
+                  "noise; statistics matched to the real EuRoC excerpt, see README). Ground truth, masks\n"
+                  "and IMU are the same as without.")
+      ->check(CLI::IsMember({"none", "euroc"}));
   cmd->add_option("--threads", a->threads, "rendering threads")->check(CLI::Range(1, 64));
   cmd->add_option("--format", a->format,
                   "euroc (default): the EuRoC folder; bag: OUT/<k>_<level>.bag (VIODE's names) with VIODE's topics\n"

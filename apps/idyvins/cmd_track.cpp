@@ -2,10 +2,13 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "commands.h"
 #include "core/error.h"
+#include "eval/image_stats.h"
 #include "frontend/feature_tracker.h"
 #include "frontend/track_quality.h"
 #include "pipeline/front_end.h"
@@ -17,8 +20,9 @@ namespace idyvins::app {
 namespace {
 
 struct TrackArgs {
-  std::string config, dataset, mode = "baseline", save_tracks;
+  std::string config, dataset, mode = "baseline", save_tracks, json;
   std::size_t max_frames = 0;
+  bool image_stats = false;
 };
 
 int runTrack(const TrackArgs& a) {
@@ -38,6 +42,7 @@ int runTrack(const TrackArgs& a) {
   ProgressBar bar("track", total, "frames");
   std::size_t frames = 0, features = 0, stereo = 0, removed = 0;
   frontend::TrackQuality quality(config);
+  eval::SequenceStatistics images(config.tracker.min_dist);
   double ms = 0, filter_ms = 0;
   while (frames < total) {
     auto m = source.next();
@@ -49,6 +54,7 @@ int runTrack(const TrackArgs& a) {
     features += out.features.size();
     for (const auto& ft : out.features) stereo += ft.has_right;
     quality.add(out);
+    if (a.image_stats) images.add(f->left, f->right);
     removed += out.removed.size();
     ms += out.tracking_ms;
     filter_ms += out.filter_ms;
@@ -69,6 +75,39 @@ int runTrack(const TrackArgs& a) {
     std::printf("right matches: distance to the epipolar line median %.2f px, p99 %.2f px (calibrated extrinsics)\n",
                 q.epipolar_median_px, q.epipolar_p99_px);
   std::printf("tracks: %zu, median length %.0f frames\n", q.tracks, q.track_length_median);
+  nlohmann::json j = {{"frames", frames},
+                      {"features_per_frame", static_cast<double>(features) / frames},
+                      {"right_fraction", q.right_fraction},
+                      {"epipolar_median_px", q.epipolar_median_px},
+                      {"epipolar_p99_px", q.epipolar_p99_px},
+                      {"tracks", q.tracks},
+                      {"track_length_median", q.track_length_median},
+                      {"tracking_ms", ms / frames}};
+  if (a.image_stats) {
+    const eval::SequenceFigures s = images.figures();
+    std::printf("images (left): brightness mean %.1f, spread (std) %.1f, frame-to-frame variation %.1f %%; "
+                "gradient median %.2f, p90 %.2f gray/px, flat (< 2 gray/px) %.1f %%; %zu Shi-Tomasi corners "
+                "(quality 0.01, %g px apart)\n",
+                s.mean.mean, s.mean.stddev, 100 * s.frame_mean_variation, s.mean.gradient_median,
+                s.mean.gradient_p90, 100 * s.mean.flat_fraction, s.mean.corners, config.tracker.min_dist);
+    std::printf("vignetting (ring mean / centre, r = 0-0.2 ... 0.8-1 of the half diagonal):");
+    for (double v : s.vignetting) std::printf(" %.3f", v);
+    std::printf("; right / left brightness %.3f\n", s.right_left_ratio);
+    j["images"] = {{"brightness_mean", s.mean.mean},
+                   {"brightness_std", s.mean.stddev},
+                   {"frame_mean_variation", s.frame_mean_variation},
+                   {"gradient_median", s.mean.gradient_median},
+                   {"gradient_p90", s.mean.gradient_p90},
+                   {"flat_fraction", s.mean.flat_fraction},
+                   {"corners", s.mean.corners},
+                   {"vignetting", s.vignetting},
+                   {"right_left_ratio", s.right_left_ratio}};
+  }
+  if (!a.json.empty()) {
+    std::ofstream out(a.json);
+    out << j.dump(1) << "\n";
+    if (!out) throw InputError(a.json, "cannot write file");
+  }
   return kOk;
 }
 
@@ -87,6 +126,10 @@ void registerTrack(CLI::App& app, int& exit_code) {
   cmd->add_option("--mode", a->mode, "baseline | ransac | seg (seg reads mav0/cam0/mask/)");
   cmd->add_option("--save-tracks", a->save_tracks, "folder for the track images");
   cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)");
+  cmd->add_flag("--image-stats", a->image_stats,
+                "also measure the input images: brightness and its spread, exposure variation between\n"
+                "frames, gradient magnitudes, Shi-Tomasi corners, vignetting profile, right/left brightness");
+  cmd->add_option("--json", a->json, "write the figures to this JSON file");
   cmd->callback([a, &exit_code] { exit_code = runTrack(*a); });
 }
 

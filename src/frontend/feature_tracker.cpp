@@ -372,9 +372,12 @@ FeatureFrame FeatureTracker::track(const StereoFrame& input, const MotionPrior& 
                                    const cv::Mat* mask) {
   const auto start = Clock::now();
   StereoFrame frame = input;  // images are reference-counted: no copy unless equalized
-  if (clahe_) {
-    clahe_->apply(input.left, frame.left);
-    if (!input.right.empty()) clahe_->apply(input.right, frame.right);
+  if (clahe_) {  // into new images: frame's share the caller's pixels
+    cv::Mat left, right;
+    clahe_->apply(input.left, left);
+    if (!input.right.empty()) clahe_->apply(input.right, right);
+    frame.left = left;
+    frame.right = right;
   }
   FrameWork w{FeatureFrame{}, filter, FilterContext{cams_[0].get(), &prior, mask, prev_t_ns_, frame.t_ns}, {}, 0.0};
   w.out.t_ns = frame.t_ns;

@@ -44,6 +44,26 @@ Renderer::Renderer(const camera::CameraParams& params, const TextureBank& textur
 
 RenderOutput Renderer::render(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c, bool sky,
                               double noise_sigma, std::uint64_t noise_seed) const {
+  RenderOutput out = renderRadiance(quads, T_w_c, sky);
+  const int W = params_.width, H = params_.height;
+  const cv::Mat radiance = out.image;
+  out.image = cv::Mat(H, W, CV_8UC1);
+  cv::Mat noise(H, W, CV_32F, cv::Scalar(0));
+  if (noise_sigma > 0) {
+    cv::RNG rng(noise_seed);
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, noise_sigma);
+  }
+  for (int py = 0; py < H; ++py) {
+    std::uint8_t* img = out.image.ptr<std::uint8_t>(py);
+    const float* rad = radiance.ptr<float>(py);
+    const float* nz = noise.ptr<float>(py);
+    for (int px = 0; px < W; ++px) img[px] = cv::saturate_cast<std::uint8_t>(rad[px] + nz[px]);
+  }
+  return out;
+}
+
+RenderOutput Renderer::renderRadiance(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c,
+                                      bool sky) const {
   const int W = params_.width, H = params_.height;
   const std::size_t N = static_cast<std::size_t>(W) * H;
   std::vector<float> zbuf(N, std::numeric_limits<float>::infinity());
@@ -98,19 +118,13 @@ RenderOutput Renderer::render(const std::vector<Quad>& quads, const Eigen::Isome
   }
 
   RenderOutput out;
-  out.image = cv::Mat(H, W, CV_8UC1);
+  out.image = cv::Mat(H, W, CV_32F);
   out.mask = cv::Mat::zeros(H, W, CV_8UC1);
   out.depth = cv::Mat::zeros(H, W, CV_32F);
-  cv::Mat noise(H, W, CV_32F, cv::Scalar(0));
-  if (noise_sigma > 0) {
-    cv::RNG rng(noise_seed);
-    rng.fill(noise, cv::RNG::NORMAL, 0.0, noise_sigma);
-  }
   for (int py = 0; py < H; ++py) {
-    std::uint8_t* img = out.image.ptr<std::uint8_t>(py);
+    float* img = out.image.ptr<float>(py);
     std::uint8_t* msk = out.mask.ptr<std::uint8_t>(py);
     float* dep = out.depth.ptr<float>(py);
-    const float* nz = noise.ptr<float>(py);
     for (int px = 0; px < W; ++px) {
       const std::size_t idx = static_cast<std::size_t>(py) * W + px;
       float value;
@@ -118,12 +132,17 @@ RenderOutput Renderer::render(const std::vector<Quad>& quads, const Eigen::Isome
         value = sky ? 215.0f - 25.0f * static_cast<float>(py) / H : 20.0f;
       } else {
         const Quad& q = quads[hit[idx]];
-        value = q.albedo * textures_.sample(q.texture, hs[idx] + q.tex_offset_s, ht[idx] + q.tex_offset_t,
-                                            hfoot[idx]);
+        const float tex = textures_.sample(q.texture, hs[idx] + q.tex_offset_s, ht[idx] + q.tex_offset_t, hfoot[idx]);
+        if (q.contrast == 1.0f) {
+          value = q.albedo * tex;
+        } else {
+          const float mean = textures_.texture(q.texture).levels.back().at<std::uint8_t>(0, 0);
+          value = q.albedo * (mean + q.contrast * (tex - mean));
+        }
         msk[px] = q.object_id;
         dep[px] = zbuf[idx];
       }
-      img[px] = cv::saturate_cast<std::uint8_t>(value + nz[px]);
+      img[px] = value;
     }
   }
   return out;

@@ -16,7 +16,7 @@ namespace idyvins::sim {
 
 /// What one render returns.
 struct RenderOutput {
-  cv::Mat image;  ///< CV_8UC1 intensity
+  cv::Mat image;  ///< CV_8UC1 intensity (renderRadiance: CV_32F)
   cv::Mat mask;   ///< CV_8UC1 object id (0 static, k moving object k)
   cv::Mat depth;  ///< CV_32F z in the camera frame (0 = sky)
 };
@@ -29,6 +29,10 @@ class Renderer {
   /// Gaussian pixel noise drawn from `noise_seed`.
   RenderOutput render(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c, bool sky,
                       double noise_sigma, std::uint64_t noise_seed) const;
+  /// The same scene as scene radiance before the sensor: `image` is CV_32F in gray levels
+  /// (unclipped, no noise); mask and depth as render().
+  RenderOutput renderRadiance(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c, bool sky) const;
+  const camera::CameraParams& params() const { return params_; }
 
  private:
   camera::CameraParams params_;

@@ -8,8 +8,10 @@
 #include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
+#include <stdexcept>
 #include <thread>
 
 #include "core/error.h"
@@ -186,6 +188,7 @@ nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult
            {{"mean", r.coverage.mean}, {"max", r.coverage.max}, {"frames_over_30pct", r.coverage.frames_over_30pct}}},
           {"imu_noise_scale", o.imu.scale},
           {"image_noise_sigma", o.image_noise_sigma},
+          {"realism", o.realism.preset},
           {"stereo_baseline_m", (rig.T_b_c[0].inverse() * rig.T_b_c[1]).translation().norm()},
           {"marker_corners_w", markers}};
 }
@@ -235,6 +238,71 @@ Scene::Scene(const SimOptions& o)
       trajectory_(o.scene.scene, o.scene.seed, o.g_norm),
       frames_(static_cast<std::size_t>(std::floor(o.duration_s * o.camera_rate_hz + 1e-9)) + 1) {
   for (int c = 0; c < 2; ++c) renderers_.emplace_back(rig_.cams[c], textures_);
+  const RealismOptions& r = o.realism;
+  if (!r.enabled) return;
+  if (r.blur_samples < 1) throw std::invalid_argument("realism: blur_samples must be >= 1");
+  if (r.low_texture_fraction > 0 || r.plain_ground) {  // plain materials on some static surfaces
+    std::mt19937_64 rng(o.scene.seed * 7919u + 11u);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (Quad& q : world_.statics) {
+      const bool ground = std::abs(q.origin.z()) < 1e-6 && q.u.cross(q.v).normalized().z() > 0.99;
+      if (u(rng) < r.low_texture_fraction || (r.plain_ground && ground))
+        q.contrast = static_cast<float>(r.low_texture_contrast);
+    }
+  }
+  for (int c = 0; c < 2; ++c)
+    vignetting_[c] = vignettingProfile(rig_.cams[c].width, rig_.cams[c].height, rig_.cams[c].cx, rig_.cams[c].cy,
+                                       r.vignetting_k1, r.vignetting_k2);
+  exposure_.assign(frames_, 1.0);
+  if (!r.auto_exposure) return;
+  // The meter: cam0 at a quarter of the resolution, vignetted, at each frame's time.
+  camera::CameraParams preview = rig_.cams[0];
+  preview.width /= 4;
+  preview.height /= 4;
+  preview.fx /= 4;
+  preview.fy /= 4;
+  preview.cx /= 4;
+  preview.cy /= 4;
+  const Renderer meter_renderer(preview, textures_);
+  const cv::Mat meter_vignetting =
+      vignettingProfile(preview.width, preview.height, preview.cx, preview.cy, r.vignetting_k1, r.vignetting_k2);
+  std::vector<double> meter(frames_);
+  for (std::size_t k = 0; k < frames_; ++k) {
+    const double t = static_cast<double>(k) / o.camera_rate_hz;
+    const BodyState b = trajectory_.at(t);
+    Eigen::Isometry3d T_w_b = Eigen::Isometry3d::Identity();
+    T_w_b.linear() = b.q_w_b.toRotationMatrix();
+    T_w_b.translation() = b.p_w_b;
+    cv::Mat rad = meter_renderer.renderRadiance(world_.quadsAt(t), T_w_b * rig_.T_b_c[0], world_.sky).image;
+    cv::multiply(rad, meter_vignetting, rad);
+    meter[k] = cv::mean(rad)[0];
+  }
+  exposure_ = autoExposureSequence(meter, r);
+}
+
+RenderOutput Scene::exposedRadiance(int cam, double t_s) const {
+  const RealismOptions& r = options_.realism;
+  auto renderAt = [&](double t) {
+    const BodyState b = trajectory_.at(t);
+    Eigen::Isometry3d T_w_b = Eigen::Isometry3d::Identity();
+    T_w_b.linear() = b.q_w_b.toRotationMatrix();
+    T_w_b.translation() = b.p_w_b;
+    return renderers_[cam].renderRadiance(world_.quadsAt(t), T_w_b * rig_.T_b_c[cam], world_.sky);
+  };
+  RenderOutput centre = renderAt(t_s);
+  const int n = r.exposure_time_s > 0 ? r.blur_samples : 1;
+  if (n == 1) return centre;
+  // n sub-frames evenly over [t − T/2, t + T/2]; the centre one (odd n) is the frame itself.
+  cv::Mat sum = cv::Mat::zeros(centre.image.size(), CV_32F);
+  for (int i = 0; i < n; ++i) {
+    const double t = t_s + r.exposure_time_s * (static_cast<double>(i) / (n - 1) - 0.5);
+    if (n % 2 == 1 && i == n / 2)
+      sum += centre.image;
+    else
+      sum += renderAt(t).image;
+  }
+  centre.image = sum / static_cast<double>(n);
+  return centre;
 }
 
 Scene::Scene(const SimOptions& o, const std::function<void(World&, const TextureBank&)>& customize) : Scene(o) {
@@ -251,9 +319,17 @@ SceneFrame Scene::renderFrame(std::size_t k) const {
   f.T_w_b = Eigen::Isometry3d::Identity();
   f.T_w_b.linear() = s.q_w_b.toRotationMatrix();
   f.T_w_b.translation() = s.p_w_b;
-  for (int c = 0; c < 2; ++c)
-    f.cam[c] = renderers_[c].render(quads, f.T_w_b * rig_.T_b_c[c], world_.sky, options_.image_noise_sigma,
-                                    options_.scene.seed * 1000003ull + k * 2 + c);
+  const std::uint64_t seed = options_.scene.seed * 1000003ull;
+  if (!options_.realism.enabled) {
+    for (int c = 0; c < 2; ++c)
+      f.cam[c] = renderers_[c].render(quads, f.T_w_b * rig_.T_b_c[c], world_.sky, options_.image_noise_sigma,
+                                      seed + k * 2 + c);
+    return f;
+  }
+  for (int c = 0; c < 2; ++c) {
+    f.cam[c] = exposedRadiance(c, f.t_s);
+    f.cam[c].image = applySensor(f.cam[c].image, vignetting_[c], exposure_[k], c, options_.realism, seed + k * 2 + c);
+  }
   return f;
 }
 

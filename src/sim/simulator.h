@@ -9,6 +9,7 @@
 
 #include "core/measurements.h"
 #include "io/config.h"
+#include "sim/camera_effects.h"
 #include "sim/renderer.h"
 #include "sim/trajectory.h"
 #include "sim/world.h"
@@ -33,7 +34,10 @@ struct SimOptions {
   double camera_rate_hz = 20.0;
   double imu_rate_hz = 200.0;
   ImuErrorModel imu;
-  double image_noise_sigma = 2.0;  ///< gray levels
+  double image_noise_sigma = 2.0;  ///< gray levels (realism off)
+  /// Camera realism (vignetting, gains, auto-exposure, blur, shot/read noise); disabled
+  /// by default: images as before, with image_noise_sigma Gaussian noise.
+  RealismOptions realism;
   int threads = 2;
   TimeNs t0_ns = 1'700'000'000'000'000'000;
   double g_norm = 9.81;
@@ -94,6 +98,11 @@ class Scene {
   Trajectory trajectory_;
   std::vector<Renderer> renderers_;
   std::size_t frames_;
+  cv::Mat vignetting_[2];          ///< realism: V(r) per camera
+  std::vector<double> exposure_;   ///< realism: auto-exposure factor per frame
+  /// realism: one camera's radiance averaged over the exposure (sub-frames along the
+  /// trajectory, vehicles moving); mask and depth at the frame's time.
+  RenderOutput exposedRadiance(int cam, double t_s) const;
 };
 
 /// Writes the dataset into out_dir (created). `progress(done, total)` is called

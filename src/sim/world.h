@@ -20,6 +20,9 @@ struct Quad {
   int texture = 0;
   double tex_offset_s = 0, tex_offset_t = 0;
   float albedo = 1.0f;   ///< brightness factor
+  /// Texture contrast around the texture's mean (1: as generated; < 1: plainer material,
+  /// simulate --realism).
+  float contrast = 1.0f;
   std::uint8_t object_id = 0;  ///< 0 = static world, k = moving object k
   bool two_sided = false;
 };
