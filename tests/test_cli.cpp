@@ -295,4 +295,18 @@ TEST(Cli, ImageSizeDifferentFromConfig) {
   EXPECT_NE(r.out.find("is 752x480, expected 640x480"), std::string::npos) << r.out;
 }
 
+TEST(Cli, BenchRefusesDataSimulatedWithAnotherRealism) {
+  idyvins::test::TempDir dir;
+  std::filesystem::create_directories(dir / "data/city_none_s1");
+  idyvins::test::writeFile(dir / "data/city_none_s1/meta.json", "{\"scene\": \"city\"}\n");  // before --realism: none
+  const Result r = run("bench --suite standard --out " + (dir / "out") + " --data " + (dir / "data") +
+                       " --seeds 1 --realism euroc");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.out.find("city_none_s1: simulated with --realism none, the benchmark asks for euroc"), std::string::npos)
+      << r.out;
+  const Result bad = run("simulate --realism cinema --out " + (dir / "x"));
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.out.find("--realism"), std::string::npos) << bad.out;
+}
+
 }  // namespace

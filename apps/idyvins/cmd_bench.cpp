@@ -28,6 +28,7 @@ namespace {
 
 struct BenchArgs {
   std::string suite = "standard", out, seeds = "1", data, modes, config = IDYVINS_VIODE_CONFIG;
+  std::string realism = "none";
   double duration = 60.0;
   bool ablations = false;
   bool reuse_runs = false;
@@ -114,11 +115,25 @@ std::vector<std::pair<std::string, std::string>> simulateMissing(const BenchArgs
         const std::string name = scene + "_" + level + "_s" + std::to_string(seed);
         const fs::path ds = data / name;
         sequences.emplace_back(name, ds.string());
-        if (fs::exists(ds / "meta.json")) continue;
+        if (fs::exists(ds / "meta.json")) {  // reuse it if it was simulated with the same realism
+          std::ifstream in(ds / "meta.json");
+          nlohmann::json meta;
+          try {
+            in >> meta;
+          } catch (const std::exception&) {
+            throw InputError((ds / "meta.json").string(), "not valid JSON (delete the folder to simulate it again)");
+          }
+          const std::string had = meta.value("realism", std::string("none"));
+          if (had != a.realism)
+            throw InputError(ds.string(), "simulated with --realism " + had + ", the benchmark asks for " + a.realism +
+                                              ": use another --data folder");
+          continue;
+        }
         std::printf("simulating %s\n", name.c_str());
         std::fflush(stdout);
         const std::string cmd = quote(exe) + " simulate --scene " + scene + " --level " + level + " --seed " +
-                                std::to_string(seed) + " --duration " + std::to_string(a.duration) + " --out " +
+                                std::to_string(seed) + " --duration " + std::to_string(a.duration) + " --realism " +
+                                a.realism + " --out " +
                                 quote(ds.string()) + " > " + quote((runs / (name + "_simulate.log")).string()) + " 2>&1";
         if (std::system(cmd.c_str()) != 0) throw InputError(ds.string(), "simulation failed (see its log in runs/)");
       }
@@ -391,6 +406,10 @@ void registerBench(CLI::App& app, int& exit_code) {
   cmd->add_option("-o,--out", a->out, "output folder")->required();
   cmd->add_option("--seeds", a->seeds, "comma-separated seeds (default 1)");
   cmd->add_option("--duration", a->duration, "seconds per sequence (default 60)");
+  cmd->add_option("--realism", a->realism,
+                  "standard: camera realism of the simulated sequences, none (default) or euroc (see\n"
+                  "simulate --help); keep each realism in its own --data folder")
+      ->check(CLI::IsMember({"none", "euroc"}));
   cmd->add_option("--data", a->data, "standard: where the simulated datasets live (default OUT/data); viode: VIODE's folder");
   cmd->add_option("-j,--jobs", a->jobs, "runs in parallel (default 2)")->check(CLI::Range(1, 64));
   cmd->add_flag("--ablations", a->ablations, "also run idy-pre and idy-ba");
