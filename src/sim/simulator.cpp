@@ -25,6 +25,16 @@ namespace idyvins::sim {
 
 using Eigen::Vector3d;
 
+namespace {
+/// T_w_b of a trajectory state.
+Eigen::Isometry3d bodyPose(const BodyState& b) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = b.q_w_b.toRotationMatrix();
+  T.translation() = b.p_w_b;
+  return T;
+}
+}  // namespace
+
 Config rigConfig(const SimOptions& options) {
   Config c;
   c.path = "sim_stereo_imu_config.yaml";
@@ -269,11 +279,7 @@ Scene::Scene(const SimOptions& o)
   std::vector<double> meter(frames_);
   for (std::size_t k = 0; k < frames_; ++k) {
     const double t = static_cast<double>(k) / o.camera_rate_hz;
-    const BodyState b = trajectory_.at(t);
-    Eigen::Isometry3d T_w_b = Eigen::Isometry3d::Identity();
-    T_w_b.linear() = b.q_w_b.toRotationMatrix();
-    T_w_b.translation() = b.p_w_b;
-    cv::Mat rad = meter_renderer.renderRadiance(world_.quadsAt(t), T_w_b * rig_.T_b_c[0], world_.sky).image;
+    cv::Mat rad = meter_renderer.renderRadiance(world_.quadsAt(t), bodyPose(trajectory_.at(t)) * rig_.T_b_c[0], world_.sky).image;
     cv::multiply(rad, meter_vignetting, rad);
     meter[k] = cv::mean(rad)[0];
   }
@@ -283,11 +289,7 @@ Scene::Scene(const SimOptions& o)
 RenderOutput Scene::exposedRadiance(int cam, double t_s) const {
   const RealismOptions& r = options_.realism;
   auto renderAt = [&](double t) {
-    const BodyState b = trajectory_.at(t);
-    Eigen::Isometry3d T_w_b = Eigen::Isometry3d::Identity();
-    T_w_b.linear() = b.q_w_b.toRotationMatrix();
-    T_w_b.translation() = b.p_w_b;
-    return renderers_[cam].renderRadiance(world_.quadsAt(t), T_w_b * rig_.T_b_c[cam], world_.sky);
+    return renderers_[cam].renderRadiance(world_.quadsAt(t), bodyPose(trajectory_.at(t)) * rig_.T_b_c[cam], world_.sky);
   };
   RenderOutput centre = renderAt(t_s);
   const int n = r.exposure_time_s > 0 ? r.blur_samples : 1;
@@ -316,9 +318,7 @@ SceneFrame Scene::renderFrame(std::size_t k) const {
   f.t_ns = options_.t0_ns + static_cast<TimeNs>(k) * static_cast<TimeNs>(std::llround(1e9 / options_.camera_rate_hz));
   const std::vector<Quad> quads = world_.quadsAt(f.t_s);
   const BodyState s = trajectory_.at(f.t_s);
-  f.T_w_b = Eigen::Isometry3d::Identity();
-  f.T_w_b.linear() = s.q_w_b.toRotationMatrix();
-  f.T_w_b.translation() = s.p_w_b;
+  f.T_w_b = bodyPose(s);
   const std::uint64_t seed = options_.scene.seed * 1000003ull;
   if (!options_.realism.enabled) {
     for (int c = 0; c < 2; ++c)
