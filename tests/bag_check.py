@@ -99,6 +99,14 @@ def test_run(idy, work):
                                             os.path.join(work, "out_converted", "trajectory.tum"), shallow=False),
           "convert then run: trajectory byte-identical to the original folder's")
     check(s is not None and s.get("ate_rmse_m") == ref["ate_rmse_m"], "convert then run: same ATE")
+    # track (the front end alone) on a bag: the same figures as on the folder.
+    figures = []
+    for dataset in (os.path.join(work, "seq"), os.path.join(work, VARIANTS[0][0])):
+        js = os.path.join(work, "track_%s.json" % os.path.basename(dataset))
+        r = sh([idy, "track", "-c", config(work), "-d", dataset, "--json", js])
+        check(r.returncode == 0, "track on %s: %s" % (os.path.basename(dataset), r.stderr.strip()[-300:]))
+        figures.append({k: v for k, v in json.load(open(js)).items() if k != "tracking_ms"} if r.returncode == 0 else None)
+    check(figures[0] is not None and figures[0] == figures[1], "track: bag and folder give the same figures")
 
 
 def test_seg(idy, work):

@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "commands.h"
+#include "input.h"
 #include "core/error.h"
 #include "eval/image_stats.h"
 #include "frontend/feature_tracker.h"
@@ -26,12 +27,13 @@ struct TrackArgs {
 };
 
 int runTrack(const TrackArgs& a) {
-  const Config config = loadConfig(a.config);
+  Config config = loadConfig(a.config);
   Mode mode;
   if (!parseMode(a.mode, mode) || (mode != Mode::kBaseline && mode != Mode::kRansac && mode != Mode::kSeg))
     throw CLI::ValidationError("--mode", "expected baseline|ransac|seg for the front end alone, got '" + a.mode + "'");
-  io::EurocSource source(io::readEurocDataset(a.dataset), config.image_width, config.image_height,
-                         mode == Mode::kSeg);
+  config.dynamic.mode = mode;
+  const Input in = openInput(a.dataset, config, "", /*masks=*/mode == Mode::kSeg);  // a folder or a bag
+  io::DataSource& source = *in.source;
   if (!a.save_tracks.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(a.save_tracks, ec);
@@ -118,11 +120,11 @@ void registerTrack(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "track",
       "Run the front end alone (stereo KLT tracker with the baseline, ransac or seg rejection)\n"
-      "on a EuRoC folder; print feature counts, the share with a right-image match and their\n"
+      "on a EuRoC folder or a ROS1 bag; print feature counts, the share with a right-image match and their\n"
       "distance to the epipolar line, track lengths and timing; optionally save images with the\n"
       "tracks drawn (green kept, yellow dynamic candidates, red removed).");
   cmd->add_option("-c,--config", a->config, "VINS-Fusion config")->required();
-  cmd->add_option("-d,--dataset", a->dataset, "EuRoC folder")->required();
+  cmd->add_option("-d,--dataset", a->dataset, "EuRoC folder or ROS1 bag (topics from the config)")->required();
   cmd->add_option("--mode", a->mode, "baseline | ransac | seg (seg reads mav0/cam0/mask/)");
   cmd->add_option("--save-tracks", a->save_tracks, "folder for the track images");
   cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)");

@@ -1,0 +1,28 @@
+#pragma once
+// Opening a dataset for the commands that drive the system: a EuRoC folder or a ROS1 bag,
+// detected, with its ground truth and (where present and wanted) ground-truth masks.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/measurements.h"
+#include "io/config.h"
+#include "io/data_source.h"
+
+namespace idyvins::app {
+
+/// The opened dataset and what it offers.
+struct Input {
+  std::unique_ptr<io::DataSource> source;
+  std::vector<StampedPose> groundtruth;
+  bool has_masks = false;  ///< the frames carry ground-truth masks (left_mask)
+};
+
+/// Opens `dataset` (a EuRoC folder or a ROS1 bag) for `config`. Masks are read when the
+/// dataset has them and `masks` is true; config.dynamic.mode seg without masks throws
+/// InputError, as does anything the readers refuse.
+Input openInput(const std::string& dataset, const Config& config, const std::string& groundtruth_topic,
+                bool masks = true);
+
+}  // namespace idyvins::app
