@@ -99,6 +99,13 @@ StereoMotionError stereoMotionError(const Vector2d& x0_l, const Vector2d& x0_r, 
   return out;
 }
 
+double stereoNoiseScale(std::vector<double> chi2, double quantile, double ref) {
+  if (ref <= 0 || chi2.empty()) return 1.0;
+  const auto k = static_cast<std::size_t>(quantile * static_cast<double>(chi2.size() - 1) + 0.5);
+  std::nth_element(chi2.begin(), chi2.begin() + static_cast<std::ptrdiff_t>(k), chi2.end());
+  return std::max(1.0, chi2[k] / ref);
+}
+
 const char* toString(StopRule rule) {
   switch (rule) {
     case StopRule::kThreshold: return "largest d_s <= lambda_dy";
@@ -250,13 +257,19 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
   const double sigma_p2 = std::max(0.0, ctx.prior->cov_p.trace()) / 3.0;
   const double dt = std::max(0.0, toSeconds(ctx.t_cur_ns - ctx.t_prev_ns));
   std::unordered_map<std::uint64_t, StereoAnchor> anchors;  // of the features seen now
+  struct Tested {
+    std::size_t item;
+    int strikes_before;
+    StereoMotionError e;
+  };
+  std::vector<Tested> tested;
   for (std::size_t k = 0; k < tracked.size(); ++k) {
     auto& it = items[tracked[k]];
     if (removed[k]) continue;
     StereoAnchor anchor;
     int strikes_before = 0;
     if (!nextAnchor(it, *ctx.prior, R, sigma_p2, anchor, strikes_before)) continue;
-    StereoAnchor& kept = anchors[it.feature->id] = anchor;
+    anchors[it.feature->id] = anchor;
     if (!it.feature->has_right) continue;
     ++stats_.stereo_tested;
     // Beyond the first step the chained priors drift (velocity error × time).
@@ -266,9 +279,23 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
                                                   o_.stereo.sigma_px);
     if (!e.valid) continue;
     it.feature->stereo_chi2 = e.chi2;
-    if (e.chi2 <= o_.stereo.chi2) continue;
-    if (o_.stereo.left_chi2 > 0 && e.chi2_left <= o_.stereo.left_chi2) continue;  // only the right match disagrees
-    kept.strikes = strikes_before + 1;
+    tested.push_back({tracked[k], strikes_before, e});
+  }
+  // The frame's noise scale, from its own χ² (kept from the last frame when too few).
+  if (static_cast<int>(tested.size()) >= o_.stereo.noise_min_features) {
+    std::vector<double> chi2;
+    chi2.reserve(tested.size());
+    for (const auto& t : tested) chi2.push_back(t.e.chi2);
+    noise_scale_ = stereoNoiseScale(std::move(chi2), o_.stereo.noise_quantile, o_.stereo.noise_ref);
+  }
+  stats_.stereo_noise_scale = noise_scale_;
+  for (const auto& t : tested) {
+    auto& it = items[t.item];
+    if (t.e.chi2 / noise_scale_ <= o_.stereo.chi2) continue;
+    // only the right match disagrees
+    if (o_.stereo.left_chi2 > 0 && t.e.chi2_left / noise_scale_ <= o_.stereo.left_chi2) continue;
+    StereoAnchor& kept = anchors[it.feature->id];
+    kept.strikes = t.strikes_before + 1;
     if (kept.strikes < o_.stereo.strikes) {  // a first failure only marks (one bad match is not motion)
       markCandidate(*it.feature);
       continue;

@@ -61,6 +61,12 @@ StereoMotionError stereoMotionError(const Eigen::Vector2d& x0_l, const Eigen::Ve
                                     const Eigen::Vector3d& t_prev_cur, double sigma_p2, double focal,
                                     double sigma_px);
 
+/// Noise scale of the stereo motion test on one frame: max(1, q / ref) with q the
+/// `quantile` of the frame's χ² values (static points dominate the low quantiles, so q
+/// follows the tracker's noise: blur, sensor noise, weak texture). 1 when ref ≤ 0 or
+/// chi2 is empty. The χ² are divided by it before the thresholds.
+double stereoNoiseScale(std::vector<double> chi2, double quantile, double ref);
+
 /// Information scale of a candidate observation (DESIGN §4.5): 1 / m_j with m_j
 /// (px², minimum projection error to the first window observation) floored at 1 px².
 inline double candidateInformation(double m_px2) { return 1.0 / std::max(m_px2, 1.0); }
@@ -92,6 +98,7 @@ struct FrameStats {
   std::vector<double> d_s_kept;  ///< the ones left after elimination
   std::size_t stereo_tested = 0;      ///< features with a right match now and a stereo anchor (stereo test)
   std::size_t stereo_eliminated = 0;  ///< of those, removed (or marked, idy-ba) by the stereo test
+  double stereo_noise_scale = 1;      ///< the χ² were divided by this (stereoNoiseScale)
 };
 
 /// Options of the `idy` filter (config keys in brackets).
@@ -128,6 +135,7 @@ class IdyFilter final : public frontend::FeatureFilter {
     int strikes;                 ///< consecutive failures of the test up to now
   };
   std::unordered_map<std::uint64_t, StereoAnchor> stereo_anchors_;  ///< id -> anchor
+  double noise_scale_ = 1;  ///< the last frame's stereo noise scale (kept on frames with few tests)
   /// CV elimination (eq. 4-5) and marking (eq. 6) of the tracked items; returns which were removed.
   std::vector<bool> eliminateAndMark(std::vector<frontend::FilterItem>& items, const std::vector<std::size_t>& tracked,
                                      const std::vector<double>& raw, const std::vector<double>& ds);

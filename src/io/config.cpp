@@ -259,6 +259,16 @@ void readDynamic(const YamlFile& f, const std::string& path, Config& c) {
   }
   c.dynamic.stereo.drift_mps = getDoubleOr(f, "stereo_motion_drift_mps", c.dynamic.stereo.drift_mps);
   c.dynamic.stereo.left_chi2 = getDoubleOr(f, "stereo_motion_left_chi2", c.dynamic.stereo.left_chi2);
+  c.dynamic.stereo.noise_ref = getDoubleOr(f, "stereo_motion_noise_ref", c.dynamic.stereo.noise_ref);
+  c.dynamic.stereo.noise_quantile = getDoubleOr(f, "stereo_motion_noise_quantile", c.dynamic.stereo.noise_quantile);
+  if (!(c.dynamic.stereo.noise_ref >= 0))
+    throw InputError(f.path, lineOf(f.root["stereo_motion_noise_ref"]),
+                     "key 'stereo_motion_noise_ref': expected a chi2 >= 0 (0 = off), got " +
+                         std::to_string(c.dynamic.stereo.noise_ref));
+  if (!(c.dynamic.stereo.noise_quantile > 0 && c.dynamic.stereo.noise_quantile < 1))
+    throw InputError(f.path, lineOf(f.root["stereo_motion_noise_quantile"]),
+                     "key 'stereo_motion_noise_quantile': expected a quantile in (0, 1), got " +
+                         std::to_string(c.dynamic.stereo.noise_quantile));
   checkPositive(f, "stereo_motion_chi2", c.dynamic.stereo.chi2);
   if (f.root["lost_track_test"])
     c.dynamic.lost_track_test = getInt(f, f.root, "lost_track_test", "0 or 1") != 0;

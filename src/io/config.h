@@ -74,6 +74,15 @@ struct StereoMotionOptions {
   /// (χ², 2 dof; 5.99 = 95 %) is not counted (the right match is suspect: hidden, or at a
   /// silhouette). 0 = off. 5.99 measured at 9ffe0a1 (13.82 cost recall), see docs/method.md.
   double left_chi2 = 5.99;
+  /// `stereo_motion_noise_ref`: the tracker's noise is measured on every frame as a
+  /// quantile of the χ² of the tested features (most are static); when that quantile
+  /// exceeds this reference, the χ² are divided by quantile / reference before the tests
+  /// (the test then holds its false-alarm rate on noisier images). Clean renders keep
+  /// the 25 % quantile below 0.1 on every frame (no change); realistic images (blur, noise,
+  /// weak texture) sit at 0.2-0.4. 0 = off (fixed σ_px).
+  double noise_ref = 0.1;
+  double noise_quantile = 0.25;  ///< `stereo_motion_noise_quantile`: the quantile (robust to 75 % moving)
+  int noise_min_features = 10;   ///< fewer tested features: keep the previous frame's scale
 };
 
 struct DynamicOptions {
