@@ -134,7 +134,7 @@ TEST(Cli, RunIdyWritesOutputsAndObservationDump) {
   const std::string csv = idyvins::test::readFile(dir / "obs.csv");
   const std::string header =
       "t_ns,id,u,v,track_length,frontend_label,d_s_px2,credibility,stereo_chi2,on_moving,confirmed_dynamic,"
-      "in_static_map,outlier_removed\n";
+      "in_static_map,outlier_removed,stereo_depth_m\n";
   ASSERT_EQ(csv.compare(0, header.size(), header), 0) << csv.substr(0, 200);
   std::size_t rows = 0, tested = 0, eliminated = 0, on_moving = 0;
   std::size_t pos = header.size();
@@ -148,9 +148,10 @@ TEST(Cli, RunIdyWritesOutputsAndObservationDump) {
       a = b + 1;
     }
     cols.push_back(csv.substr(a, end - a));
-    ASSERT_EQ(cols.size(), 13u) << csv.substr(pos, end - pos);
+    ASSERT_EQ(cols.size(), 14u) << csv.substr(pos, end - pos);
     ++rows;
     tested += std::stod(cols[8]) >= 0;
+    EXPECT_EQ(std::stod(cols[8]) >= 0, std::stod(cols[13]) > 0);  // a depth exactly where a χ² is
     eliminated += cols[5] == "eliminated";
     on_moving += cols[9] == "1";
     pos = end + 1;

@@ -126,12 +126,13 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
   EXPECT_DOUBLE_EQ(c.dynamic.stereo.left_chi2, 5.99);
   EXPECT_DOUBLE_EQ(c.dynamic.stereo.noise_ref, 0.1);
   EXPECT_DOUBLE_EQ(c.dynamic.stereo.noise_quantile, 0.25);
+  EXPECT_DOUBLE_EQ(c.dynamic.stereo.min_disparity_px, 0.0);
   const Config s = loadConfig(writeConfig(
       dir,
       std::string(kConfig) +
           "stereo_motion_test: 0\nstereo_motion_chi2: 13.3\nstereo_motion_sigma_px: 0.4\nstereo_motion_strikes: 1\n"
           "stereo_motion_anchor_frames: 1\nstereo_motion_drift_mps: 0.1\nstereo_motion_left_chi2: 0\n"
-          "stereo_motion_noise_ref: 0\nstereo_motion_noise_quantile: 0.5\n",
+          "stereo_motion_noise_ref: 0\nstereo_motion_noise_quantile: 0.5\nstereo_motion_min_disparity_px: 1.5\n",
       kCamera));
   EXPECT_FALSE(s.dynamic.stereo.enabled);
   EXPECT_DOUBLE_EQ(s.dynamic.stereo.chi2, 13.3);
@@ -142,11 +143,15 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
   EXPECT_DOUBLE_EQ(s.dynamic.stereo.left_chi2, 0.0);
   EXPECT_DOUBLE_EQ(s.dynamic.stereo.noise_ref, 0.0);
   EXPECT_DOUBLE_EQ(s.dynamic.stereo.noise_quantile, 0.5);
+  EXPECT_DOUBLE_EQ(s.dynamic.stereo.min_disparity_px, 1.5);
   expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_noise_ref: -1\n", kCamera)); },
               "stereo_motion_noise_ref");
   expectError(
       [&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_noise_quantile: 1\n", kCamera)); },
       "stereo_motion_noise_quantile");
+  expectError(
+      [&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_min_disparity_px: -2\n", kCamera)); },
+      "stereo_motion_min_disparity_px");
   expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_sigma_px: 0\n", kCamera)); },
               "stereo_motion_sigma_px");
 }

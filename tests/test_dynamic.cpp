@@ -645,3 +645,62 @@ TEST(IdyFilter, NoiseScaleHoldsTheFalseAlarmRateOnHeavyTailedTracks) {
 
 }  // namespace
 }  // namespace idyvins::dynamic
+
+namespace idyvins::dynamic {
+namespace {
+
+TEST(IdyFilter, PointsBeyondTheMinimumDisparityAreNotJudged) {
+  // Two cars driving away along the view at 2 m per frame, one 10 m ahead (disparity
+  // 380 · 0.11 / 10 = 4.2 px) and one 40 m ahead (1.0 px), among 60 static points at
+  // 6–14 m. The test sees both; with stereo_motion_min_disparity_px 1.5 the far one is
+  // left alone (its χ² is still reported), the near one goes as before.
+  const auto cam = pinholeCamera();
+  const auto T_r_l = rightFromLeft();
+  const frontend::MotionPrior prior = forwardPrior(0.3, 1e-8);
+  auto run = [&](double min_disparity_px, std::vector<bool>& removed, std::vector<double>& chi2) {
+    IdyOptions o;
+    o.stereo.enabled = true;
+    o.T_r_l = T_r_l;
+    o.stereo.min_disparity_px = min_disparity_px;
+    IdyFilter filter(o);
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<Vector3d> points(62);
+    for (auto& p : points) p = Vector3d(4 * u(rng), 2 * u(rng), 10 + 4 * u(rng));
+    points[0] = Vector3d(1.0, 0.3, 10.0);
+    points[1] = Vector3d(3.0, 0.5, 40.0);
+    std::vector<frontend::Feature> feats(points.size());
+    std::vector<frontend::FilterItem> items(points.size());
+    removed.assign(points.size(), false);
+    chi2.assign(points.size(), -1);
+    const frontend::FilterContext ctx{cam.get(), &prior, nullptr, 0, 50'000'000};
+    for (int frame = 0; frame < 3; ++frame) {
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const Vector3d p_cur = points[i] + Vector3d(0, 0, i <= 1 ? 2.0 : 0.0) - prior.t_prev_cur;
+        trackedStereo(i, observe(points[i], T_r_l), observe(p_cur, T_r_l), feats[i], items[i]);
+        points[i] = p_cur;
+      }
+      filter.apply(ctx, items);
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        removed[i] = removed[i] || items[i].remove;
+        chi2[i] = std::max(chi2[i], feats[i].stereo_chi2);
+      }
+    }
+  };
+  std::vector<bool> all, gated;
+  std::vector<double> chi2_all, chi2_gated;
+  run(0.0, all, chi2_all);
+  run(1.5, gated, chi2_gated);
+  EXPECT_TRUE(all[0]);
+  EXPECT_TRUE(all[1]);  // judged: the far car fails too
+  EXPECT_TRUE(gated[0]);
+  EXPECT_FALSE(gated[1]);  // beyond the minimum disparity: not judged
+  EXPECT_GT(chi2_gated[1], StereoMotionOptions{}.chi2);  // but its χ² is reported
+  for (std::size_t i = 2; i < all.size(); ++i) {
+    EXPECT_FALSE(all[i]) << i;
+    EXPECT_FALSE(gated[i]) << i;
+  }
+}
+
+}  // namespace
+}  // namespace idyvins::dynamic

@@ -279,6 +279,7 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
                                                   o_.stereo.sigma_px);
     if (!e.valid) continue;
     it.feature->stereo_chi2 = e.chi2;
+    it.feature->stereo_depth = e.depth;
     tested.push_back({tracked[k], strikes_before, e});
   }
   // The frame's noise scale, from its own χ² (kept from the last frame when too few).
@@ -289,8 +290,10 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
     noise_scale_ = stereoNoiseScale(std::move(chi2), o_.stereo.noise_quantile, o_.stereo.noise_ref);
   }
   stats_.stereo_noise_scale = noise_scale_;
+  const double baseline_px = fx * o_.T_r_l.translation().norm();
   for (const auto& t : tested) {
     auto& it = items[t.item];
+    if (o_.stereo.min_disparity_px > 0 && baseline_px < o_.stereo.min_disparity_px * t.e.depth) continue;
     if (t.e.chi2 / noise_scale_ <= o_.stereo.chi2) continue;
     // only the right match disagrees
     if (o_.stereo.left_chi2 > 0 && t.e.chi2_left / noise_scale_ <= o_.stereo.left_chi2) continue;

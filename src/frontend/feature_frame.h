@@ -26,6 +26,7 @@ struct Feature {
   FeatureLabel label = FeatureLabel::kStatic;
   double score = 0;      ///< filter's per-feature score (IDY: d_s, px²), 0 if none
   double stereo_chi2 = -1;  ///< IDY stereo motion test's χ² (4 dof), -1 if not tested
+  double stereo_depth = 0;  ///< depth (m) of the stereo test's anchor point, 0 if not tested
 };
 
 /// The front end's output for one frame.

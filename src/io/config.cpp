@@ -261,6 +261,12 @@ void readDynamic(const YamlFile& f, const std::string& path, Config& c) {
   c.dynamic.stereo.left_chi2 = getDoubleOr(f, "stereo_motion_left_chi2", c.dynamic.stereo.left_chi2);
   c.dynamic.stereo.noise_ref = getDoubleOr(f, "stereo_motion_noise_ref", c.dynamic.stereo.noise_ref);
   c.dynamic.stereo.noise_quantile = getDoubleOr(f, "stereo_motion_noise_quantile", c.dynamic.stereo.noise_quantile);
+  c.dynamic.stereo.min_disparity_px =
+      getDoubleOr(f, "stereo_motion_min_disparity_px", c.dynamic.stereo.min_disparity_px);
+  if (!(c.dynamic.stereo.min_disparity_px >= 0))
+    throw InputError(f.path, lineOf(f.root["stereo_motion_min_disparity_px"]),
+                     "key 'stereo_motion_min_disparity_px': expected pixels >= 0 (0 = off), got " +
+                         std::to_string(c.dynamic.stereo.min_disparity_px));
   if (!(c.dynamic.stereo.noise_ref >= 0))
     throw InputError(f.path, lineOf(f.root["stereo_motion_noise_ref"]),
                      "key 'stereo_motion_noise_ref': expected a chi2 >= 0 (0 = off), got " +

@@ -83,6 +83,10 @@ struct StereoMotionOptions {
   double noise_ref = 0.1;
   double noise_quantile = 0.25;  ///< `stereo_motion_noise_quantile`: the quantile (robust to 75 % moving)
   int noise_min_features = 10;   ///< fewer tested features: keep the previous frame's scale
+  /// `stereo_motion_min_disparity_px`: points whose anchor disparity (f·b / depth) is
+  /// below this are not judged by the test (their stereo depth cannot tell motion from
+  /// noise); 0 = judge all.
+  double min_disparity_px = 0;
 };
 
 struct DynamicOptions {

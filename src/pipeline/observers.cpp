@@ -40,7 +40,8 @@ void ObservationRecorder::onFrame(const StereoFrame& input, const FrameOutput& o
     eval::addObservation(tracks_, {f.id, moving, f.label == frontend::FeatureLabel::kEliminated});
     if (keep_observations_)
       observations_.push_back({f.id, moving, output.t_ns, static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y()),
-                               static_cast<float>(f.score), cred, static_cast<float>(f.stereo_chi2), f.label,
+                               static_cast<float>(f.score), cred, static_cast<float>(f.stereo_chi2),
+                               static_cast<float>(f.stereo_depth), f.label,
                                f.track_length});
   };
   for (const auto& f : output.features.features) record(f);
@@ -72,13 +73,13 @@ void ObservationRecorder::writeCsv(const std::string& path, const Result& result
   std::ofstream f(path);
   if (!f) throw InputError(path, "cannot write file");
   f << "t_ns,id,u,v,track_length,frontend_label,d_s_px2,credibility,stereo_chi2,on_moving,confirmed_dynamic,"
-       "in_static_map,outlier_removed\n";
+       "in_static_map,outlier_removed,stereo_depth_m\n";
   static const char* kLabels[] = {"static", "candidate", "eliminated"};
   for (const auto& o : observations_)
     f << o.t_ns << ',' << o.id << ',' << o.u << ',' << o.v << ',' << o.track_length << ','
       << kLabels[static_cast<int>(o.label)] << ',' << o.d_s << ',' << o.credibility << ',' << o.stereo_chi2 << ','
       << (has_masks_ ? (o.on_moving ? "1" : "0") : "") << ',' << confirmed.count(o.id) << ','
-      << in_static.count(o.id) << ',' << outlier_ids_.count(o.id) << '\n';
+      << in_static.count(o.id) << ',' << outlier_ids_.count(o.id) << ',' << o.stereo_depth << '\n';
   if (!f) throw InputError(path, "write failed");
 }
 

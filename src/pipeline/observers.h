@@ -40,7 +40,7 @@ class ObservationRecorder final : public FrameObserver {
     std::uint64_t id;
     bool on_moving;
     TimeNs t_ns;
-    float u, v, d_s, credibility, stereo_chi2;
+    float u, v, d_s, credibility, stereo_chi2, stereo_depth;
     frontend::FeatureLabel label;
     int track_length;
   };
