@@ -225,11 +225,16 @@ TEST(Config, TrackerImageKeys) {
   EXPECT_FALSE(plain.tracker.equalize);
   EXPECT_TRUE(plain.tracker.stereo_gain_compensation);
   EXPECT_DOUBLE_EQ(plain.tracker.stereo_epipolar_px, 2.0);
+  EXPECT_FALSE(plain.tracker.stereo_refine);
   const Config set = loadConfig(writeConfig(
-      dir, std::string(kConfig) + "equalize: 1\nstereo_gain_compensation: 0\nstereo_epipolar_px: 1.0\n", kCamera));
+      dir, std::string(kConfig) + "equalize: 1\nstereo_gain_compensation: 0\nstereo_epipolar_px: 1.0\nstereo_refine: 1\n",
+      kCamera));
   EXPECT_TRUE(set.tracker.equalize);
   EXPECT_FALSE(set.tracker.stereo_gain_compensation);
   EXPECT_DOUBLE_EQ(set.tracker.stereo_epipolar_px, 1.0);
+  EXPECT_TRUE(set.tracker.stereo_refine);
+  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_refine: yes\n", kCamera)); },
+              "stereo_refine");
   expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_epipolar_px: 0\n", kCamera)); },
               "stereo_epipolar_px");
   expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "equalize: clahe\n", kCamera)); },
@@ -237,6 +242,7 @@ TEST(Config, TrackerImageKeys) {
   const Config euroc = loadConfig(std::string(IDYVINS_SOURCE_DIR) + "/config/euroc/euroc_stereo_imu_config.yaml");
   EXPECT_TRUE(euroc.tracker.equalize) << "measured on the real excerpt (test_frontend)";
   EXPECT_DOUBLE_EQ(euroc.tracker.stereo_epipolar_px, 1.0);
+  EXPECT_TRUE(euroc.tracker.stereo_refine) << "measured on the real excerpt (test_frontend)";
 }
 
 TEST(Config, BadValuesNameKeyAndLine) {

@@ -187,6 +187,23 @@ TEST_F(SimDataset, MetaCoverageMatchesTheMasks) {
   EXPECT_EQ(meta["moving_objects"].size(), 8u);
 }
 
+TEST(SimConfig, RealismConfigsRefineRightMatchesCleanOnesLeaveTheDefault) {
+  test::TempDir dir;
+  SimOptions o;
+  const Config clean = rigConfig(o);
+  EXPECT_FALSE(clean.tracker.stereo_refine);
+  o.realism = realismPreset("euroc");
+  const Config real = rigConfig(o);
+  EXPECT_TRUE(real.tracker.stereo_refine);
+  writeVinsConfig(clean, dir / "clean", "c.yaml");
+  writeVinsConfig(real, dir / "real", "c.yaml");
+  EXPECT_FALSE(loadConfig(dir / "clean/c.yaml").tracker.stereo_refine);
+  EXPECT_TRUE(loadConfig(dir / "real/c.yaml").tracker.stereo_refine);
+  std::ifstream in(dir / "clean/c.yaml");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text.find("stereo_refine"), std::string::npos) << "clean configs stay as they were";
+}
+
 TEST(SimDeterminism, SameArgumentsGiveByteIdenticalFiles) {
   test::TempDir dir;
   SimOptions o;

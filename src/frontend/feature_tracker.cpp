@@ -352,6 +352,13 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
     feat.has_right = false;
     bool ok = status[i] != 0;
     if (ok && config_.tracker.flow_back) ok = status_back[i] && cv::norm(back[i] - pl[i]) <= params_.flow_back_px;
+    if (ok && config_.tracker.stereo_refine) {
+      const PatchTemplate tmpl = makePatchTemplate(left_pyr[0], feat.uv, params_.patch_half);
+      AffineWarp warp;
+      warp.t = toEigen(pr[i]);
+      if (tmpl.valid && alignAffine(tmpl, right_pyr[0], warp).converged && (warp.t - toEigen(pr[i])).norm() < 1.0)
+        pr[i] = cv::Point2f(static_cast<float>(warp.t.x()), static_cast<float>(warp.t.y()));
+    }
     Eigen::Vector2d xy_r;
     if (!ok || !cams_[1]->liftToNormalized(toEigen(pr[i]), xy_r)) continue;
     // Epipolar check with the known extrinsics (distance to the line, in pixels).

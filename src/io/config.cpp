@@ -227,6 +227,7 @@ void readImuTrackerSolver(const YamlFile& f, Config& c) {
     c.tracker.stereo_gain_compensation = getInt(f, f.root, "stereo_gain_compensation", "0 or 1") != 0;
   c.tracker.stereo_epipolar_px = getDoubleOr(f, "stereo_epipolar_px", c.tracker.stereo_epipolar_px);
   checkPositive(f, "stereo_epipolar_px", c.tracker.stereo_epipolar_px);
+  if (f.root["stereo_refine"]) c.tracker.stereo_refine = getInt(f, f.root, "stereo_refine", "0 or 1") != 0;
   c.solver.max_solver_time_s = getDouble(f, f.root, "max_solver_time", "seconds per solve");
   c.solver.max_num_iterations = getInt(f, f.root, "max_num_iterations", "solver iterations");
   c.solver.keyframe_parallax_px = getDouble(f, f.root, "keyframe_parallax", "pixels");
@@ -352,7 +353,7 @@ std::string describe(const Config& c) {
   o << "  tracker: max_cnt " << c.tracker.max_cnt << ", min_dist " << c.tracker.min_dist
     << ", F_threshold " << c.tracker.f_threshold << ", flow_back " << c.tracker.flow_back << ", equalize "
     << c.tracker.equalize << ", stereo_gain_compensation " << c.tracker.stereo_gain_compensation
-    << ", stereo_epipolar_px " << c.tracker.stereo_epipolar_px << "\n";
+    << ", stereo_epipolar_px " << c.tracker.stereo_epipolar_px << ", stereo_refine " << c.tracker.stereo_refine << "\n";
   o << "  solver: max_num_iterations " << c.solver.max_num_iterations << ", max_solver_time "
     << c.solver.max_solver_time_s << " s ("
     << (c.solver.time_limited ? "applied: solver_time_limit 1, results depend on load" : "not applied: deterministic")

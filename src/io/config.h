@@ -39,6 +39,12 @@ struct TrackerOptions {
   /// `stereo_epipolar_px` (default 2): a right match farther than this from its epipolar
   /// line (known extrinsics) is dropped.
   double stereo_epipolar_px = 2.0;
+  /// `stereo_refine` (default 0): each right match is refined by aligning the left patch
+  /// to the right image (affine, gain and bias invariant, as the first-patch alignment) and
+  /// kept when that converges within 1 px of KLT's. KLT assumes equal brightness; a
+  /// left/right difference a global gain does not remove (vignetting at the two image
+  /// positions, saturation) biases its disparity, most on near, weakly textured surfaces.
+  bool stereo_refine = false;
 };
 
 /// Back-end (sliding-window solver) options.

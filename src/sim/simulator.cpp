@@ -68,6 +68,9 @@ Config rigConfig(const SimOptions& options) {
   c.imu.gyr_w = m.gyro_random_walk * std::sqrt(rate);
   c.imu.g_norm = options.g_norm;
   c.tracker = TrackerOptions{150, 30, 1.0, true};
+  // A real camera's config: right matches refined gain- and bias-invariantly (KLT's
+  // disparity is biased by brightness differences a global gain leaves, see TrackerOptions).
+  c.tracker.stereo_refine = options.realism.enabled;
   c.solver = SolverOptions{0.04, 8, 10.0};
   return c;
 }
@@ -237,6 +240,7 @@ void writeVinsConfig(const Config& c, const std::string& folder, const std::stri
                 c.imu.gyr_n, c.imu.acc_w, c.imu.gyr_w, c.imu.g_norm, toString(c.dynamic.mode), c.dynamic.lambda_dy,
                 c.dynamic.lambda_dy_c);
   s += buf;
+  if (c.tracker.stereo_refine) s += "\n# Camera realism: right matches refined gain/bias-invariantly\nstereo_refine: 1\n";
   writeText(dir / name, s);
 }
 
