@@ -152,12 +152,24 @@ TrackAccuracy measureTrackAccuracy(const TrackerParams& params, const std::strin
 }
 
 TEST(FeatureTracker, TracksFollowTheTrueProjectionsOnAStaticSequence) {
+  // Measured: 9083 steps, median 0.071 px, p99 0.646 px, no id switch; before corners
+  // were kept off the image border (corners_off_border) 9150, 0.089 px, 1.20 px, 0.01 %.
   const TrackAccuracy acc = measureTrackAccuracy(TrackerParams{});
   ASSERT_GT(acc.steps, 3000u);
-  EXPECT_LT(acc.median, 0.3);
-  EXPECT_LT(acc.p99, 1.5);  // the front-end issue's target; KLT alone: 2.09 px (next test)
-  EXPECT_LT(acc.switch_rate, 0.005);
+  EXPECT_LT(acc.median, 0.1);
+  EXPECT_LT(acc.p99, 1.0);  // the front-end issue's target was 1.5 px; KLT alone: 2.09 px
+  EXPECT_LT(acc.switch_rate, 0.001);
   EXPECT_LT(acc.v99, 1.0);
+}
+
+TEST(FeatureTracker, CornersAtTheBorderWithoutAFirstPatchDrift) {
+  // The same 100 frames with corners allowed up to 1 px from the border: the tracks born
+  // where no first patch can be cut follow KLT alone and drift.
+  TrackerParams at_border;
+  at_border.corners_off_border = false;
+  const TrackAccuracy with = measureTrackAccuracy(at_border), without = measureTrackAccuracy(TrackerParams{});
+  EXPECT_GT(with.p99, 1.5 * without.p99);
+  EXPECT_GT(with.median, without.median);
 }
 
 TEST(FeatureTracker, TracksFollowTheTrueProjectionsAtRealismEuroc) {
@@ -168,12 +180,13 @@ TEST(FeatureTracker, TracksFollowTheTrueProjectionsAtRealismEuroc) {
   RecordProperty("median_px", std::to_string(acc.median));
   RecordProperty("p99_px", std::to_string(acc.p99));
   RecordProperty("switch_rate", std::to_string(acc.switch_rate));
-  // Measured when added: 8584 steps, median 0.164 px, p99 2.52 px, id switches 0.08 %
-  // (clean images: 9150, 0.089 px, 1.20 px, 0.01 %).
+  // Measured: 8836 steps, median 0.132 px, p99 0.828 px, no id switch (clean images:
+  // 9083, 0.071 px, 0.646 px); when added, before corners were kept off the image border:
+  // 8584 steps, median 0.164 px, p99 2.52 px, id switches 0.08 %.
   ASSERT_GT(acc.steps, 6000u);
-  EXPECT_LT(acc.median, 0.25);
-  EXPECT_LT(acc.p99, 3.0);
-  EXPECT_LT(acc.switch_rate, 0.005);
+  EXPECT_LT(acc.median, 0.2);
+  EXPECT_LT(acc.p99, 1.2);
+  EXPECT_LT(acc.switch_rate, 0.001);
 }
 
 /// Right-image matches against the true disparity (rendered depth at the left pixel,
@@ -249,13 +262,15 @@ std::vector<StereoAccuracy> measureStereoAccuracy(const std::string& realism, co
   return out;
 }
 
-TEST(FeatureTracker, StereoRefinementRemovesMostOfKltsBrightnessBias) {
-  // Measured when added (100 frames of city none seed 1, signed error of the right match
-  // against the rendered depth): clean KLT mean -0.002 px, MAD 0.028 px; realism euroc KLT
-  // near (< 10 m) -0.044 px, far +0.011, MAD 0.068 (switching the effects off one at a
-  // time: the left/right gain difference, auto-exposure and the plain materials make it);
-  // refined (stereo_refine, what simulate writes into a realism config) near -0.026, far
-  // +0.001, MAD 0.049. At 5 m the disparity is 8 px: 0.04 px is a 0.5 % depth error.
+TEST(FeatureTracker, StereoRefinementTightensRightMatchesAtRealism) {
+  // Measured (100 frames of city none seed 1, signed error of the right match against the
+  // rendered depth, corners at least patch_half + 2 px inside the image): clean KLT mean
+  // -0.003 px, MAD 0.028 px; realism euroc KLT near (< 10 m) -0.032 px, far +0.008, MAD
+  // 0.066 (switching the effects off one at a time: the left/right gain difference,
+  // auto-exposure and the plain materials make it); refined (stereo_refine, what simulate
+  // writes into a realism config) near -0.028, far -0.000, MAD 0.049. At 5 m the disparity
+  // is 8 px: 0.03 px is a 0.4 % depth error. Before corners were kept off the image border
+  // KLT's near bias was -0.044 px and refinement took it to -0.026.
   const StereoAccuracy clean = measureStereoAccuracy("none", {false})[0];
   const std::vector<StereoAccuracy> euroc = measureStereoAccuracy("euroc", {false, true});
   const StereoAccuracy& real = euroc[0];
@@ -266,8 +281,8 @@ TEST(FeatureTracker, StereoRefinementRemovesMostOfKltsBrightnessBias) {
   EXPECT_LT(std::abs(clean.near_mean), 0.01);
   EXPECT_LT(std::abs(clean.far_mean), 0.01);
   EXPECT_LT(clean.mad, 0.04);
-  EXPECT_GT(std::abs(real.near_mean), 0.03);  // KLT on realistic images: biased near points
-  EXPECT_LT(std::abs(refined.near_mean), 0.7 * std::abs(real.near_mean));
+  EXPECT_GT(std::abs(real.near_mean), 0.025);  // KLT on realistic images: biased near points
+  EXPECT_LT(std::abs(refined.near_mean), std::abs(real.near_mean));
   EXPECT_LT(std::abs(refined.far_mean), 0.5 * std::abs(real.far_mean));
   EXPECT_LT(refined.mad, 0.8 * real.mad);
 }
@@ -437,10 +452,12 @@ TEST(FeatureTracker, LostNewCornersAwayFromTheirStaticPredictionAreJudgedMoving)
     }
     // Measured at 2d6b296: 440 of 642 on the truck, 19 of 509 static. Without the ZNCC
     // ceiling (moved = any mismatch) 577 and 57: corners on the truck's silhouette over the
-    // background half match and are left alone now.
+    // background half match and are left alone now. Since no corner is detected where its
+    // first patch cannot be cut (near the border): 434 of 629 and 20 of 332 (the border
+    // corners were lost often and never judged moving).
     ASSERT_GT(lost_vehicle, 100u);
     EXPECT_GT(judged_vehicle, lost_vehicle * 6 / 10);
-    EXPECT_LT(judged_static, lost_static * 6 / 100);
+    EXPECT_LT(judged_static, lost_static * 7 / 100);
   }
 }
 
@@ -493,8 +510,10 @@ TEST(FeatureTracker, StereoMatchesWithLowZnccAreMoreOftenWrongOrBesideAVehicle) 
               "the others: %zu (%zu wrong, %zu with a vehicle)\n",
               min_zncc, low.total, low.wrong, low.vehicle, high.total, high.wrong, high.vehicle);
   // Measured at 6537e71: 296 of 7516 below 0.8, 3.4 % of them wrong against 1.2 % of the
-  // others, 4.4 % with a vehicle in the patch against 2.3 %. A weak filter, but a cheap one.
-  ASSERT_GT(low.total, 100u);
+  // others, 4.4 % with a vehicle in the patch against 2.3 %. Since no corner is detected
+  // where its first patch cannot be cut (most low-ZNCC matches were corners at the image
+  // border): 35 of 7511, 29 % wrong against 1.2 %, 31 % with a vehicle against 2.2 %.
+  ASSERT_GT(low.total, 20u);
   EXPECT_LT(low.total, (low.total + high.total) * 6 / 100);  // it costs few matches
   const auto rate = [](std::size_t a, const StereoMatchCounts& n) { return static_cast<double>(a) / n.total; };
   EXPECT_GT(rate(low.wrong, low), 2.0 * rate(high.wrong, high));
@@ -588,7 +607,8 @@ TEST(FeatureTracker, HoldsOnTheRealEurocExcerpt) {
   // the matches median 0.12 px and p99 0.79 px, median track length 95 frames (the
   // platform hardly moves in these 4.75 s); 18 % right matches before gain compensation
   // and equalization. With stereo_refine (on in this config): 51 %, median 0.10 px, p99
-  // 0.64 px; without it 50 %, 0.12 px and 0.79 px.
+  // 0.64 px; without it 50 %, 0.12 px and 0.79 px. With corners kept off the border
+  // (COMMIT_BORDER): 53 %, 0.10 px, 0.63 px; without refinement 52 %, 0.125 px, 0.785 px.
   const std::string cfg_path = std::string(IDYVINS_SOURCE_DIR) + "/config/euroc/euroc_stereo_imu_config.yaml";
   const io::EurocDataset ds = io::readEurocDataset(std::string(IDYVINS_SHARED_DATA) + "/euroc_v101_micro");
   auto measure = [&](bool equalize, bool gain_compensation, bool refine = true) {

@@ -269,6 +269,15 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
     cv::circle(mask, pt, r, cv::Scalar(0), cv::FILLED);
   }
   tracks = std::move(kept);
+  if (params_.align_first_patch && params_.corners_off_border) {
+    // No corner where its first patch cannot be cut: such a track would follow KLT
+    // alone and drift (a line meeting the image border also looks like a corner there).
+    const int b = std::min({params_.patch_half + 2, mask.cols / 2, mask.rows / 2});
+    mask.rowRange(0, b).setTo(cv::Scalar(0));
+    mask.rowRange(mask.rows - b, mask.rows).setTo(cv::Scalar(0));
+    mask.colRange(0, b).setTo(cv::Scalar(0));
+    mask.colRange(mask.cols - b, mask.cols).setTo(cv::Scalar(0));
+  }
   const int n_max = config_.tracker.max_cnt - static_cast<int>(tracks.size());
   detected = 0;
   if (n_max <= 0) return;

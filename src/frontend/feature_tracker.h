@@ -68,6 +68,12 @@ struct TrackerParams {
   int patch_half = 7;                 ///< template of (2 half + 1)² px
   double min_patch_zncc = 0.8;        ///< below: the track is dropped
   double max_patch_correction_px = 2.0;  ///< KLT and alignment disagree by more: dropped
+  /// With align_first_patch: no corner is detected within patch_half + 2 px of the image
+  /// border, where its first patch cannot be cut. Such a track followed KLT alone and
+  /// drifted (an edge meeting the border also looks like a corner to the detector, whose
+  /// gradients reflect at the border). Measured on 100 frames of city none (clean): p99
+  /// of the true projection error 1.20 -> 0.65 px; at realism euroc 2.52 -> 0.83 px.
+  bool corners_off_border = true;
 };
 
 /// `image` with its brightness mapped to `reference`'s: I' = a I + b with a and b such that
