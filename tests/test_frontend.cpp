@@ -608,7 +608,7 @@ TEST(FeatureTracker, HoldsOnTheRealEurocExcerpt) {
   // platform hardly moves in these 4.75 s); 18 % right matches before gain compensation
   // and equalization. With stereo_refine (on in this config): 51 %, median 0.10 px, p99
   // 0.64 px; without it 50 %, 0.12 px and 0.79 px. With corners kept off the border
-  // (COMMIT_BORDER): 53 %, 0.10 px, 0.63 px; without refinement 52 %, 0.125 px, 0.785 px.
+  // (e94ba2e): 53 %, 0.10 px, 0.63 px; without refinement 52 %, 0.125 px, 0.785 px.
   const std::string cfg_path = std::string(IDYVINS_SOURCE_DIR) + "/config/euroc/euroc_stereo_imu_config.yaml";
   const io::EurocDataset ds = io::readEurocDataset(std::string(IDYVINS_SHARED_DATA) + "/euroc_v101_micro");
   auto measure = [&](bool equalize, bool gain_compensation, bool refine = true) {
