@@ -70,6 +70,16 @@ void FeatureTracker::reset() {
   followed_.clear();
 }
 
+bool FeatureTracker::movesWithEliminated(const Track& t, const std::vector<Track>& kept, int radius) const {
+  for (const Track& k : kept) {
+    if (!followed_.count(k.id)) continue;
+    const double dx = k.uv.x - t.uv.x, dy = k.uv.y - t.uv.y;
+    if (dx * dx + dy * dy > static_cast<double>(radius) * radius) continue;
+    if ((k.flow - t.flow).norm() <= params_.move_with_eliminated_px) return true;
+  }
+  return false;
+}
+
 bool FeatureTracker::inBorder(const cv::Point2f& p) const {
   const int b = params_.border_px;
   return p.x >= b && p.y >= b && p.x < config_.image_width - b && p.y < config_.image_height - b;
@@ -121,6 +131,7 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Ma
       continue;
     }
     tracks.push_back({old.id, p1[i], xy, old.length + 1, old.patch, A_patch});
+    tracks.back().flow = toEigen(p1[i]) - toEigen(old.uv);
     prev.push_back({toEigen(old.uv), old.xy, old.has_right, old.xy_right, old.uv_right});
   }
 }
@@ -252,7 +263,8 @@ std::vector<uchar> FeatureTracker::hiddenAtPrediction(const std::vector<cv::Mat>
   return hidden;
 }
 
-void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected) {
+void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected,
+                               std::vector<const Track*>& with_eliminated) {
   // Keep long tracks first; drop tracks closer than min_dist to a longer one.
   std::vector<std::size_t> order(tracks.size());
   std::iota(order.begin(), order.end(), 0);
@@ -262,9 +274,16 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
   cv::Mat& mask = detect_mask_;
   const int r = static_cast<int>(config_.tracker.min_dist);
   std::vector<Track> kept;
+  const bool judge_pruned = params_.judge_lost_new_tracks && params_.keep_following_eliminated &&
+                            params_.move_with_eliminated_px > 0 && !followed_.empty();
   for (std::size_t i : order) {
     const cv::Point pt(cvRound(tracks[i].uv.x), cvRound(tracks[i].uv.y));
-    if (mask.at<uchar>(pt) != 255) continue;
+    if (mask.at<uchar>(pt) != 255) {
+      if (judge_pruned && tracks[i].length == 2 && movesWithEliminated(tracks[i], kept, r))
+        for (const Track& old : prev_tracks_)
+          if (old.id == tracks[i].id) with_eliminated.push_back(&old);
+      continue;
+    }
     kept.push_back(tracks[i]);
     cv::circle(mask, pt, r, cv::Scalar(0), cv::FILLED);
   }
@@ -419,7 +438,14 @@ FeatureFrame FeatureTracker::track(const StereoFrame& input, const MotionPrior& 
   w.out.rejected = w.out.removed.size();
   if (params_.keep_following_eliminated) followEliminated(w, followed, tracks);
 
-  detectNew(frame.left, tracks, w.out.detected);
+  std::vector<const Track*> with_eliminated;  // into prev_tracks_
+  detectNew(frame.left, tracks, w.out.detected, with_eliminated);
+  for (const Track* t : with_eliminated) {
+    Feature f = featureOf(*t, FeatureLabel::kEliminated);  // its first (previous) frame, as lost_moving
+    f.has_right = t->has_right;
+    f.xy_right = t->xy_right;
+    w.out.lost_moving.push_back(f);
+  }
   std::vector<Track> final_tracks = assembleFeatures(w, tracks, carried);
   setVelocities(w.out, dt);
   matchNewAndFollowed(w.out, final_tracks);

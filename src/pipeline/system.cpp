@@ -186,9 +186,11 @@ void System::mapLostMoving(const frontend::FeatureFrame& ff, FrameOutput& out) {
   summary_.lost_tested += ff.lost_tested;
   summary_.lost_moving += ff.lost_moving.size();
   if (!prev_T_w_c_) return;  // triangulated with the cameras of the frame they were seen in
-  for (const auto& f : ff.lost_moving)
+  for (const auto& f : ff.lost_moving) {
+    if (!f.has_right) continue;  // judged moving without a stereo point: labelled only
     if (const auto p_w = triangulateInRange(prev_T_w_c_->first, prev_T_w_c_->second, f))
       out.eliminated_points.push_back({*p_w, 1, f.id});
+  }
 }
 
 void System::mapEliminated(const frontend::FeatureFrame& ff, FrameOutput& out) {
