@@ -42,7 +42,7 @@ struct RealismOptions {
 };
 
 /// The named presets: "none" (disabled) and "euroc" (measured against the real EuRoC
-/// excerpt, README). Throws std::invalid_argument for another name.
+/// excerpt, docs/real-images.md). Throws std::invalid_argument for another name.
 RealismOptions realismPreset(const std::string& name);
 
 /// V(r) per pixel (CV_32F, width x height) for principal point (cx, cy).
