@@ -43,16 +43,17 @@ sim::SimOptions options(const std::string& scene, sim::Level level, double durat
   return o;
 }
 
-/// A city street without traffic plus one vehicle crossing it along +y, textured as vehicle 1.
+/// A city street without traffic plus one vehicle driving along `lane_dir` (default +y: crossing), textured as vehicle 1.
 sim::Scene crossingVehicleScene(double duration_s, const std::string& type, const Vector3d& size,
-                                const Vector3d& lane_start, double speed) {
+                                const Vector3d& lane_start, double speed,
+                                const Vector3d& lane_dir = Vector3d::UnitY()) {
   return sim::Scene(options("city", sim::Level::kNone, duration_s), [&](sim::World& w, const sim::TextureBank& tex) {
     sim::Vehicle v;
     v.id = 1;
     v.type = type;
     v.size = size;
     v.lane_start = lane_start;
-    v.lane_dir = Vector3d::UnitY();
+    v.lane_dir = lane_dir;
     v.lane_length = 400;
     v.speed = speed;
     v.texture = tex.index(sim::TextureKind::kVehicle, 1);
@@ -479,18 +480,8 @@ TEST(FeatureTracker, CornersPrunedNextToAnEliminatedTrackThatMovedWithThemAreJud
   // corners draw together. Its tracks are eliminated in their third frame and followed; a
   // corner in its second frame that the min_dist pruning drops next to one of them,
   // having moved with it, is reported as moving (lost_moving).
-  const sim::Scene scene(options("city", sim::Level::kNone, 3.0), [](sim::World& w, const sim::TextureBank& tex) {
-    sim::Vehicle v;
-    v.id = 1;
-    v.type = "truck";
-    v.size = Vector3d(8.0, 2.5, 3.0);
-    v.lane_start = Vector3d(6.0, -1.5, 0.0);
-    v.lane_dir = Vector3d::UnitX();
-    v.lane_length = 400;
-    v.speed = 10.0;
-    v.texture = tex.index(sim::TextureKind::kVehicle, 1);
-    w.vehicles.push_back(v);
-  });
+  const sim::Scene scene =
+      crossingVehicleScene(3.0, "truck", Vector3d(8.0, 2.5, 3.0), Vector3d(6.0, -1.5, 0.0), 10.0, Vector3d::UnitX());
   std::size_t counts[2][2] = {{0, 0}, {0, 0}};  // [move_with_eliminated on][on the truck]
   for (const bool on : {true, false}) {
     TrackerParams params;

@@ -279,9 +279,11 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
   for (std::size_t i : order) {
     const cv::Point pt(cvRound(tracks[i].uv.x), cvRound(tracks[i].uv.y));
     if (mask.at<uchar>(pt) != 255) {
-      if (judge_pruned && tracks[i].length == 2 && movesWithEliminated(tracks[i], kept, r))
-        for (const Track& old : prev_tracks_)
-          if (old.id == tracks[i].id) with_eliminated.push_back(&old);
+      if (judge_pruned && tracks[i].length == 2 && movesWithEliminated(tracks[i], kept, r)) {
+        const auto old = std::find_if(prev_tracks_.begin(), prev_tracks_.end(),
+                                      [&](const Track& p) { return p.id == tracks[i].id; });
+        if (old != prev_tracks_.end()) with_eliminated.push_back(&*old);
+      }
       continue;
     }
     kept.push_back(tracks[i]);

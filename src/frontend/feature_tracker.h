@@ -175,11 +175,12 @@ class FeatureTracker {
   /// Per not-found corner: 1 when a clearly nearer surface stands at its predicted pixel.
   std::vector<uchar> hiddenAtPrediction(const std::vector<cv::Mat>& pyr, const std::vector<LostJudged>& judged,
                                         const std::vector<std::size_t>& not_found) const;
+  /// Whether a kept followed eliminated track within `radius` px moved with `t`
+  /// (displacements within TrackerParams::move_with_eliminated_px).
+  bool movesWithEliminated(const Track& t, const std::vector<Track>& kept, int radius) const;
   /// Prunes tracks closer than min_dist to a longer one, then detects new corners. A
   /// corner in its second frame pruned next to a followed eliminated track that moved
-  /// with it (corners_move_with_eliminated) is appended to `with_eliminated`.
-  /// Whether a kept followed eliminated track within `radius` px moved with `t`.
-  bool movesWithEliminated(const Track& t, const std::vector<Track>& kept, int radius) const;
+  /// with it is appended to `with_eliminated` (its previous-frame track, in prev_tracks_).
   void detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected,
                  std::vector<const Track*>& with_eliminated);
   /// Matches features[i] for i in `which` (all when null) in the right image. With
