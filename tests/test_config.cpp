@@ -123,6 +123,8 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
   EXPECT_EQ(c.dynamic.stereo.strikes, 2);
   EXPECT_EQ(c.dynamic.stereo.anchor_frames, 10);
   EXPECT_DOUBLE_EQ(c.dynamic.stereo.drift_mps, 0.02);
+  EXPECT_DOUBLE_EQ(c.dynamic.stereo.remove_chi2, 0.0);
+  EXPECT_EQ(c.dynamic.stereo.persistent_strikes, 3);
   EXPECT_DOUBLE_EQ(c.dynamic.stereo.left_chi2, 5.99);
   EXPECT_DOUBLE_EQ(c.dynamic.stereo.noise_ref, 0.1);
   EXPECT_DOUBLE_EQ(c.dynamic.stereo.noise_quantile, 0.25);
@@ -132,7 +134,8 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
       std::string(kConfig) +
           "stereo_motion_test: 0\nstereo_motion_chi2: 13.3\nstereo_motion_sigma_px: 0.4\nstereo_motion_strikes: 1\n"
           "stereo_motion_anchor_frames: 1\nstereo_motion_drift_mps: 0.1\nstereo_motion_left_chi2: 0\n"
-          "stereo_motion_noise_ref: 0\nstereo_motion_noise_quantile: 0.5\nstereo_motion_min_disparity_px: 1.5\n",
+          "stereo_motion_noise_ref: 0\nstereo_motion_noise_quantile: 0.5\nstereo_motion_min_disparity_px: 1.5\n"
+          "stereo_motion_remove_chi2: 0\nstereo_motion_persistent_strikes: 0\n",
       kCamera));
   EXPECT_FALSE(s.dynamic.stereo.enabled);
   EXPECT_DOUBLE_EQ(s.dynamic.stereo.chi2, 13.3);
@@ -144,6 +147,13 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
   EXPECT_DOUBLE_EQ(s.dynamic.stereo.noise_ref, 0.0);
   EXPECT_DOUBLE_EQ(s.dynamic.stereo.noise_quantile, 0.5);
   EXPECT_DOUBLE_EQ(s.dynamic.stereo.min_disparity_px, 1.5);
+  EXPECT_DOUBLE_EQ(s.dynamic.stereo.remove_chi2, 0.0);
+  EXPECT_EQ(s.dynamic.stereo.persistent_strikes, 0);
+  expectError(
+      [&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_persistent_strikes: -1\n", kCamera)); },
+      "stereo_motion_persistent_strikes");
+  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_remove_chi2: -1\n", kCamera)); },
+              "stereo_motion_remove_chi2");
   expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_noise_ref: -1\n", kCamera)); },
               "stereo_motion_noise_ref");
   expectError(

@@ -364,8 +364,12 @@ TEST(IdyFilter, StereoTestMarksOnFirstFailureAndRemovesOnSecond) {
   IdyOptions o;
   o.stereo.enabled = true;
   o.stereo.sigma_px = 0.25;
+  o.stereo.remove_chi2 = 0;  // = chi2: every repeated failure removes
   o.T_r_l = T_r_l;
   IdyFilter filter(o);
+  IdyOptions high_bar = o;  // a repeated failure below remove_chi2 stays a candidate
+  high_bar.stereo.remove_chi2 = 1e9;
+  IdyFilter keeps(high_bar);
   IdyOptions off = o;
   off.stereo.enabled = false;
   IdyFilter paper_only(off);
@@ -396,16 +400,33 @@ TEST(IdyFilter, StereoTestMarksOnFirstFailureAndRemovesOnSecond) {
   paper_only.apply(ctx, copy_items);  // the paper's test alone: the car passes as static
   EXPECT_FALSE(copy_items[0].remove);
   EXPECT_EQ(copy_feats[0].label, frontend::FeatureLabel::kStatic);
+  const auto run_copy = [&](IdyFilter& f) {
+    copy_items = items;
+    copy_feats = feats;
+    for (std::size_t i = 0; i < copy_items.size(); ++i) copy_items[i].feature = &copy_feats[i];
+    f.apply(ctx, copy_items);
+  };
+  run_copy(keeps);
   filter.apply(ctx, items);  // first failure: marked only
   EXPECT_FALSE(items[0].remove);
   EXPECT_EQ(feats[0].label, frontend::FeatureLabel::kCandidate);
   EXPECT_GT(feats[0].stereo_chi2, o.stereo.chi2);
   EXPECT_EQ(filter.lastStats().stereo_tested, points.size());
   frameItems(feats, items);
+  run_copy(keeps);  // second failure, but below remove_chi2: still only a candidate
+  EXPECT_FALSE(copy_items[0].remove);
+  EXPECT_EQ(copy_feats[0].label, frontend::FeatureLabel::kCandidate);
+  EXPECT_EQ(keeps.lastStats().stereo_eliminated, 0u);
   filter.apply(ctx, items);  // second consecutive failure: removed
   EXPECT_TRUE(items[0].remove);
   EXPECT_EQ(feats[0].label, frontend::FeatureLabel::kEliminated);
   EXPECT_EQ(filter.lastStats().stereo_eliminated, 1u);
+  EXPECT_GT(feats[0].stereo_chi2, 80.0);  // clear: removed at its second failure even with remove_chi2 80
+  frameItems(feats, items);
+  run_copy(keeps);  // a third consecutive failure persists: removed whatever its χ²
+  ASSERT_EQ(high_bar.stereo.persistent_strikes, 3);  // the default
+  EXPECT_TRUE(copy_items[0].remove);
+  EXPECT_EQ(keeps.lastStats().stereo_eliminated, 1u);
   for (std::size_t i = 1; i < items.size(); ++i) {
     EXPECT_FALSE(items[i].remove) << i;
     EXPECT_LT(feats[i].stereo_chi2, 1e-3) << i;
@@ -428,6 +449,7 @@ TEST(IdyFilter, LeftGateSparesStaticPointsWhoseRightMatchAloneIsOff) {
   const frontend::MotionPrior prior = forwardPrior(0.5, 1e-6);
   IdyOptions gated;
   gated.stereo.enabled = true;
+  gated.stereo.remove_chi2 = 0;  // every repeated failure removes: the gate alone decides
   gated.T_r_l = T_r_l;
   ASSERT_DOUBLE_EQ(gated.stereo.left_chi2, 5.99);  // the default
   IdyOptions ungated = gated;
@@ -576,6 +598,7 @@ TEST(IdyFilter, NoiseScaleHoldsTheFalseAlarmRateOnHeavyTailedTracks) {
   auto runFrames = [&](double noise_ref, int& car_removed_at, int& static_removed, double& mean_scale) {
     IdyOptions o;
     o.stereo.enabled = true;
+    o.stereo.remove_chi2 = 0;  // every repeated failure removes: the noise scale alone decides
     o.T_r_l = T_r_l;
     o.stereo.noise_ref = noise_ref;
     IdyFilter filter(o);

@@ -299,7 +299,11 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
     if (o_.stereo.left_chi2 > 0 && t.e.chi2_left / noise_scale_ <= o_.stereo.left_chi2) continue;
     StereoAnchor& kept = anchors[it.feature->id];
     kept.strikes = t.strikes_before + 1;
-    if (kept.strikes < o_.stereo.strikes) {  // a first failure only marks (one bad match is not motion)
+    // A first failure only marks (one bad match is not motion); a repeated one removes when
+    // its χ² is clear or the failures persist (slow motion along the line of sight).
+    const bool clear = t.e.chi2 / noise_scale_ > o_.stereo.remove_chi2;
+    const bool persistent = o_.stereo.persistent_strikes > 0 && kept.strikes >= o_.stereo.persistent_strikes;
+    if (kept.strikes < o_.stereo.strikes || !(clear || persistent)) {
       markCandidate(*it.feature);
       continue;
     }

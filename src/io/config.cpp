@@ -259,6 +259,19 @@ void readDynamic(const YamlFile& f, const std::string& path, Config& c) {
     checkPositive(f, "stereo_motion_anchor_frames", c.dynamic.stereo.anchor_frames);
   }
   c.dynamic.stereo.drift_mps = getDoubleOr(f, "stereo_motion_drift_mps", c.dynamic.stereo.drift_mps);
+  c.dynamic.stereo.remove_chi2 = getDoubleOr(f, "stereo_motion_remove_chi2", c.dynamic.stereo.remove_chi2);
+  if (f.root["stereo_motion_persistent_strikes"]) {
+    c.dynamic.stereo.persistent_strikes =
+        getInt(f, f.root, "stereo_motion_persistent_strikes", "consecutive failures, >= 0 (0 = never)");
+    if (c.dynamic.stereo.persistent_strikes < 0)
+      throw InputError(f.path, lineOf(f.root["stereo_motion_persistent_strikes"]),
+                       "key 'stereo_motion_persistent_strikes': expected consecutive failures >= 0 (0 = never), got " +
+                           std::to_string(c.dynamic.stereo.persistent_strikes));
+  }
+  if (!(c.dynamic.stereo.remove_chi2 >= 0))
+    throw InputError(f.path, lineOf(f.root["stereo_motion_remove_chi2"]),
+                     "key 'stereo_motion_remove_chi2': expected a chi2 >= 0 (0 = stereo_motion_chi2), got " +
+                         std::to_string(c.dynamic.stereo.remove_chi2));
   c.dynamic.stereo.left_chi2 = getDoubleOr(f, "stereo_motion_left_chi2", c.dynamic.stereo.left_chi2);
   c.dynamic.stereo.noise_ref = getDoubleOr(f, "stereo_motion_noise_ref", c.dynamic.stereo.noise_ref);
   c.dynamic.stereo.noise_quantile = getDoubleOr(f, "stereo_motion_noise_quantile", c.dynamic.stereo.noise_quantile);
