@@ -187,7 +187,7 @@ TEST_F(SimDataset, MetaCoverageMatchesTheMasks) {
   EXPECT_EQ(meta["moving_objects"].size(), 8u);
 }
 
-TEST(SimConfig, RealismConfigsRefineRightMatchesCleanOnesLeaveTheDefault) {
+TEST(SimConfig, RealismConfigsRefineRightMatchesAndRaiseTheRemovalBarCleanOnesLeaveTheDefaults) {
   test::TempDir dir;
   SimOptions o;
   const Config clean = rigConfig(o);
@@ -195,13 +195,21 @@ TEST(SimConfig, RealismConfigsRefineRightMatchesCleanOnesLeaveTheDefault) {
   o.realism = realismPreset("euroc");
   const Config real = rigConfig(o);
   EXPECT_TRUE(real.tracker.stereo_refine);
+  EXPECT_EQ(clean.dynamic.stereo.remove_chi2, 0.0) << "clean images: every repeated failure removes";
+  EXPECT_EQ(real.dynamic.stereo.remove_chi2, 80.0);
+  EXPECT_EQ(real.dynamic.stereo.persistent_strikes, 3);
   writeVinsConfig(clean, dir / "clean", "c.yaml");
   writeVinsConfig(real, dir / "real", "c.yaml");
   EXPECT_FALSE(loadConfig(dir / "clean/c.yaml").tracker.stereo_refine);
   EXPECT_TRUE(loadConfig(dir / "real/c.yaml").tracker.stereo_refine);
+  const Config real_read = loadConfig(dir / "real/c.yaml");
+  EXPECT_EQ(real_read.dynamic.stereo.remove_chi2, 80.0);
+  EXPECT_EQ(real_read.dynamic.stereo.persistent_strikes, 3);
+  EXPECT_EQ(loadConfig(dir / "clean/c.yaml").dynamic.stereo.remove_chi2, 0.0);
   std::ifstream in(dir / "clean/c.yaml");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_EQ(text.find("stereo_refine"), std::string::npos) << "clean configs stay as they were";
+  EXPECT_EQ(text.find("stereo_motion_remove_chi2"), std::string::npos) << "clean configs stay as they were";
 }
 
 TEST(SimDeterminism, SameArgumentsGiveByteIdenticalFiles) {
