@@ -310,4 +310,28 @@ TEST(Cli, BenchRefusesDataSimulatedWithAnotherRealism) {
   EXPECT_NE(bad.out.find("--realism"), std::string::npos) << bad.out;
 }
 
+TEST(Cli, BenchRefusesDataOfTheOtherFamily) {
+  // A folder of standard sequences is not the validation suite, and the other way round.
+  idyvins::test::TempDir dir;
+  std::filesystem::create_directories(dir / "data/city_none_s1");
+  idyvins::test::writeFile(dir / "data/city_none_s1/meta.json", "{\"scene\": \"city\"}\n");  // before --family: standard
+  const Result r = run("bench --suite validation --out " + (dir / "out") + " --data " + (dir / "data") + " --seeds 1");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.out.find("city_none_s1: simulated with --family standard, the validation suite needs --family validation"),
+            std::string::npos)
+      << r.out;
+  idyvins::test::writeFile(dir / "data/city_none_s1/meta.json", "{\"scene\": \"city\", \"family\": \"validation\"}\n");
+  const Result s = run("bench --suite standard --out " + (dir / "out") + " --data " + (dir / "data") + " --seeds 1");
+  EXPECT_EQ(s.code, 1);
+  EXPECT_NE(s.out.find("simulated with --family validation, the standard suite needs --family standard"),
+            std::string::npos)
+      << s.out;
+  const Result bad = run("simulate --family tuning --out " + (dir / "x"));
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.out.find("--family"), std::string::npos) << bad.out;
+  const Result suite = run("bench --suite other --out " + (dir / "out"));
+  EXPECT_NE(suite.code, 0);
+  EXPECT_NE(suite.out.find("expected standard, validation or viode"), std::string::npos) << suite.out;
+}
+
 }  // namespace

@@ -109,6 +109,7 @@ const std::vector<std::string> kScenes = {"city", "parking_lot"}, kLevels = {"no
 std::vector<std::pair<std::string, std::string>> simulateMissing(const BenchArgs& a, const std::string& exe,
                                                                  const fs::path& data, const fs::path& runs) {
   std::vector<std::pair<std::string, std::string>> sequences;
+  const std::string family = a.suite == "validation" ? "validation" : "standard";
   for (int seed : parseSeeds(a.seeds))
     for (const auto& scene : kScenes)
       for (const auto& level : kLevels) {
@@ -127,13 +128,17 @@ std::vector<std::pair<std::string, std::string>> simulateMissing(const BenchArgs
           if (had != a.realism)
             throw InputError(ds.string(), "simulated with --realism " + had + ", the benchmark asks for " + a.realism +
                                               ": use another --data folder");
+          const std::string had_family = meta.value("family", std::string("standard"));
+          if (had_family != family)
+            throw InputError(ds.string(), "simulated with --family " + had_family + ", the " + a.suite +
+                                              " suite needs --family " + family + ": use another --data folder");
           continue;
         }
         std::printf("simulating %s\n", name.c_str());
         std::fflush(stdout);
         const std::string cmd = quote(exe) + " simulate --scene " + scene + " --level " + level + " --seed " +
                                 std::to_string(seed) + " --duration " + std::to_string(a.duration) + " --realism " +
-                                a.realism + " --out " +
+                                a.realism + " --family " + family + " --out " +
                                 quote(ds.string()) + " > " + quote((runs / (name + "_simulate.log")).string()) + " 2>&1";
         if (std::system(cmd.c_str()) != 0) throw InputError(ds.string(), "simulation failed (see its log in runs/)");
       }
@@ -345,8 +350,8 @@ std::vector<Job> viodeJobs(const BenchArgs& a, const fs::path& dir, const fs::pa
 }
 
 int runBench(const BenchArgs& a) {
-  if (a.suite != "standard" && a.suite != "viode")
-    throw CLI::ValidationError("--suite", "expected standard or viode, got '" + a.suite + "'");
+  if (a.suite != "standard" && a.suite != "validation" && a.suite != "viode")
+    throw CLI::ValidationError("--suite", "expected standard, validation or viode, got '" + a.suite + "'");
   if (a.suite == "viode" && a.data.empty()) throw CLI::ValidationError("--data", "the folder holding VIODE's bags");
   parseSeeds(a.seeds);  // usage errors before any work
   const std::string exe = self();
@@ -397,9 +402,11 @@ void registerBench(CLI::App& app, int& exit_code) {
       "parallel, evaluate, and write OUT/table1.md (ATE, the paper's Table I), OUT/table2.md (timing,\n"
       "Table II), OUT/dynamic.md (classification, map cleanliness), OUT/results.json and OUT/plots/.\n"
       "standard: simulate (or reuse) city and parking_lot x none/low/mid/high for the given seeds.\n"
+      "validation: the same grid from the family no default is tuned on (simulate --family validation:\n"
+      "EuRoC's intrinsics, VINS-Fusion's EuRoC IMU keys, other materials, a handheld trajectory).\n"
       "viode: VIODE's bags as published under --data: <environment>/<k>_<level>.bag with environment\n"
       "city_day, city_night, parking_lot and 0_none, 1_low, 2_mid, 3_high (masks from /cam0/segmentation).");
-  cmd->add_option("--suite", a->suite, "benchmark suite: standard (default) or viode");
+  cmd->add_option("--suite", a->suite, "benchmark suite: standard (default), validation or viode");
   cmd->add_option("--config", a->config,
                   "viode: the config (its folder is copied per environment with that environment's vehicle\n"
                   "table; default: the source tree's config/viode/viode_stereo_imu_config.yaml)");
@@ -407,10 +414,10 @@ void registerBench(CLI::App& app, int& exit_code) {
   cmd->add_option("--seeds", a->seeds, "comma-separated seeds (default 1)");
   cmd->add_option("--duration", a->duration, "seconds per sequence (default 60)");
   cmd->add_option("--realism", a->realism,
-                  "standard: camera realism of the simulated sequences, none (default) or euroc (see\n"
+                  "standard, validation: camera realism of the simulated sequences, none (default) or euroc (see\n"
                   "simulate --help); keep each realism in its own --data folder")
       ->check(CLI::IsMember({"none", "euroc"}));
-  cmd->add_option("--data", a->data, "standard: where the simulated datasets live (default OUT/data); viode: VIODE's folder");
+  cmd->add_option("--data", a->data, "standard, validation: where the simulated datasets live (default OUT/data); viode: VIODE's folder");
   cmd->add_option("-j,--jobs", a->jobs, "runs in parallel (default 2)")->check(CLI::Range(1, 64));
   cmd->add_flag("--ablations", a->ablations, "also run idy-pre and idy-ba");
   cmd->add_option("--threads", a->run_threads,

@@ -35,6 +35,46 @@ Eigen::Isometry3d bodyPose(const BodyState& b) {
 }
 }  // namespace
 
+bool parseFamily(const std::string& text, Family& family) {
+  if (text == "standard") family = Family::kStandard;
+  else if (text == "validation") family = Family::kValidation;
+  else return false;
+  return true;
+}
+
+const char* toString(Family family) { return family == Family::kValidation ? "validation" : "standard"; }
+
+namespace {
+
+/// The validation family's rig: EuRoC's intrinsics (each camera its own, no distortion),
+/// a 0.11 m baseline, both cameras a little rotated from the ideal forward mount.
+void validationRig(Config& c) {
+  const double intrinsics[2][4] = {{458.654, 457.296, 367.215, 248.375}, {457.587, 456.134, 379.999, 255.238}};
+  // Small mount errors (rad): roll, pitch, yaw of each camera about the ideal mount.
+  const double mount[2][3] = {{0.004, 0.012, -0.006}, {0.007, 0.0095, -0.0025}};
+  for (int i = 0; i < 2; ++i) {
+    camera::CameraParams& p = c.cams[i];
+    p.fx = intrinsics[i][0];
+    p.fy = intrinsics[i][1];
+    p.cx = intrinsics[i][2];
+    p.cy = intrinsics[i][3];
+    p.dist = {0.0, 0.0, 0.0, 0.0};
+    const Eigen::Matrix3d R_err = (Eigen::AngleAxisd(mount[i][2], Vector3d::UnitY()) *
+                                   Eigen::AngleAxisd(mount[i][1], Vector3d::UnitX()) *
+                                   Eigen::AngleAxisd(mount[i][0], Vector3d::UnitZ()))
+                                      .toRotationMatrix();  // in the camera frame: y down, x right, z forward
+    c.T_b_c[i].linear() = c.T_b_c[i].linear() * R_err;
+    c.T_b_c[i].translation() = Vector3d(0.06, i == 0 ? 0.055 : -0.055, 0.01);
+  }
+  // VINS-Fusion's own EuRoC config values, as a user with an EuRoC-like IMU would write them.
+  c.imu.acc_n = 0.1;
+  c.imu.gyr_n = 0.01;
+  c.imu.acc_w = 0.001;
+  c.imu.gyr_w = 0.0001;
+}
+
+}  // namespace
+
 Config rigConfig(const SimOptions& options) {
   Config c;
   c.path = "sim_stereo_imu_config.yaml";
@@ -67,6 +107,7 @@ Config rigConfig(const SimOptions& options) {
   c.imu.acc_w = m.acc_random_walk * std::sqrt(rate);
   c.imu.gyr_w = m.gyro_random_walk * std::sqrt(rate);
   c.imu.g_norm = options.g_norm;
+  if (options.family == Family::kValidation) validationRig(c);
   c.tracker = TrackerOptions{150, 30, 1.0, true};
   // A real camera's config: right matches refined gain- and bias-invariantly (KLT's
   // disparity is biased by brightness differences a global gain leaves, see TrackerOptions).
@@ -194,6 +235,7 @@ nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult
           {"scene", o.scene.scene},
           {"level", toString(o.scene.level)},
           {"seed", o.scene.seed},
+          {"family", toString(o.family)},
           {"opening_vehicle", o.scene.opening_vehicle},
           {"duration_s", o.duration_s},
           {"t0_ns", o.t0_ns},
@@ -261,9 +303,11 @@ void writeVinsConfig(const Config& c, const std::string& folder, const std::stri
 Scene::Scene(const SimOptions& o)
     : options_(o),
       rig_(rigConfig(o)),
-      textures_(o.scene.seed),
+      textures_(o.scene.seed, 3, 10,
+                o.family == Family::kValidation ? TextureStyle::kValidation : TextureStyle::kStandard),
       world_(buildWorld(o.scene, textures_)),
-      trajectory_(o.scene.scene, o.scene.seed, o.g_norm),
+      trajectory_(o.scene.scene, o.scene.seed, o.g_norm,
+                  o.family == Family::kValidation ? TrajectoryStyle::kHandheld : TrajectoryStyle::kDrone),
       frames_(static_cast<std::size_t>(std::floor(o.duration_s * o.camera_rate_hz + 1e-9)) + 1) {
   for (int c = 0; c < 2; ++c) renderers_.emplace_back(rig_.cams[c], textures_);
   const RealismOptions& r = o.realism;

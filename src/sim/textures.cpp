@@ -81,6 +81,114 @@ cv::Mat makeTexture(TextureKind kind, cv::RNG& rng, int n) {
   return out;
 }
 
+/// Fractal value noise: octaves of `base_cells`, 2 base_cells, ... cells, each half the
+/// amplitude of the one before, around `mean`.
+cv::Mat fractalNoise(cv::RNG& rng, int n, double mean, double amplitude, int base_cells, int octaves) {
+  cv::Mat f(n, n, CV_32F, cv::Scalar(mean));
+  double amp = amplitude;
+  for (int o = 0, cells = base_cells; o < octaves && cells <= n; ++o, cells *= 2, amp *= 0.5)
+    f += background(rng, n, 0.0, amp, cells);
+  return f;
+}
+
+/// Rows of bricks of random shade with mortar joints (a validation facade).
+void bricks(cv::Mat& f, cv::RNG& rng, int n) {
+  const int row_h = rng.uniform(n / 48, n / 28), joint = std::max(2, row_h / 8);
+  for (int y = 0, row = 0; y < n; y += row_h, ++row) {
+    int x = row % 2 ? -rng.uniform(row_h, 2 * row_h) : 0;
+    while (x < n) {
+      const int w = rng.uniform(2 * row_h, 4 * row_h);
+      const cv::Rect brick = cv::Rect(x + joint / 2, y + joint / 2, w - joint, row_h - joint) & cv::Rect(0, 0, n, n);
+      const double shade = rng.gaussian(22.0);
+      if (!brick.empty()) f(brick) += cv::Scalar(shade);
+      x += w;
+    }
+    cv::line(f, {0, y}, {n, y}, cv::Scalar(rng.uniform(170, 205)), joint);
+  }
+}
+
+/// Dark random-walk cracks (a validation concrete).
+void cracks(cv::Mat& f, cv::RNG& rng, int n, int count) {
+  for (int i = 0; i < count; ++i) {
+    cv::Point p(rng.uniform(0, n), rng.uniform(0, n));
+    double heading = rng.uniform(0.0, 2.0 * CV_PI);
+    const int segments = rng.uniform(6, 20);
+    for (int k = 0; k < segments; ++k) {
+      heading += rng.gaussian(0.6);
+      const int len = rng.uniform(n / 100, n / 30);
+      const cv::Point q(p.x + static_cast<int>(len * std::cos(heading)), p.y + static_cast<int>(len * std::sin(heading)));
+      cv::line(f, p, q, cv::Scalar(rng.uniform(30, 70)), rng.uniform(1, 3), cv::LINE_AA);
+      p = q;
+    }
+  }
+}
+
+/// Materials of the validation suite: other generators than makeTexture's, so that a
+/// front end tuned on those meets surfaces it was not tuned on.
+cv::Mat makeValidationTexture(TextureKind kind, cv::RNG& rng, int n) {
+  cv::Mat f;
+  switch (kind) {
+    case TextureKind::kFacade: {
+      f = fractalNoise(rng, n, 125, 18, 8, 4);
+      bricks(f, rng, n);
+      // A few doors, shutters and signs: plain dark or light panels with a frame.
+      for (int i = 0, count = rng.uniform(3, 8); i < count; ++i) {
+        const cv::Rect r(rng.uniform(0, n), rng.uniform(0, n), rng.uniform(n / 16, n / 6), rng.uniform(n / 12, n / 5));
+        cv::rectangle(f, r, cv::Scalar(rng.uniform(35, 225)), cv::FILLED);
+        cv::rectangle(f, r, cv::Scalar(rng.uniform(60, 200)), std::max(2, n / 300));
+      }
+      break;
+    }
+    case TextureKind::kGround: {
+      f = fractalNoise(rng, n, 95, 30, 8, 6);  // asphalt: grain at every scale
+      for (int i = 0; i < 3000; ++i)           // aggregate speckles
+        cv::circle(f, cv::Point(rng.uniform(0, n), rng.uniform(0, n)), rng.uniform(1, 3),
+                   cv::Scalar(rng.uniform(40, 200)), cv::FILLED);
+      for (int i = 0; i < 6; ++i) {  // worn painted lines
+        const int x = rng.uniform(0, n);
+        cv::line(f, {x, 0}, {x + rng.uniform(-n / 8, n / 8), n}, cv::Scalar(rng.uniform(170, 220)),
+                 std::max(3, n / 80));
+      }
+      break;
+    }
+    case TextureKind::kVehicle: {
+      // Paint with few features: smooth shading, panel seams, a few badges and windows.
+      f = background(rng, n, rng.uniform(60, 190), 25, 3);
+      for (int i = 0; i < 14; ++i) {
+        const int a = rng.uniform(0, n);
+        if (i % 2)
+          cv::line(f, {a, 0}, {a, n}, cv::Scalar(rng.uniform(20, 80)), 2, cv::LINE_AA);
+        else
+          cv::line(f, {0, a}, {n, a}, cv::Scalar(rng.uniform(20, 80)), 2, cv::LINE_AA);
+      }
+      for (int i = 0; i < 10; ++i)
+        cv::ellipse(f, cv::Point(rng.uniform(0, n), rng.uniform(0, n)),
+                    cv::Size(rng.uniform(n / 64, n / 16), rng.uniform(n / 64, n / 24)), rng.uniform(0, 180), 0, 360,
+                    cv::Scalar(rng.uniform(10, 245)), cv::FILLED, cv::LINE_AA);
+      for (int i = 0; i < 4; ++i)
+        cv::rectangle(f, cv::Rect(rng.uniform(0, n), rng.uniform(0, n), rng.uniform(n / 10, n / 4), n / 10),
+                      cv::Scalar(rng.uniform(15, 60)), cv::FILLED);
+      break;
+    }
+    case TextureKind::kConcrete: {
+      f = fractalNoise(rng, n, 135, 22, 6, 6);
+      for (int i = 0; i < 40; ++i)  // stains
+        cv::circle(f, cv::Point(rng.uniform(0, n), rng.uniform(0, n)), rng.uniform(n / 60, n / 12),
+                   cv::Scalar(rng.uniform(90, 170)), cv::FILLED, cv::LINE_AA);
+      cv::GaussianBlur(f, f, cv::Size(0, 0), 2.0);
+      f += fractalNoise(rng, n, 0, 10, 64, 3);
+      cracks(f, rng, n, 60);
+      break;
+    }
+    case TextureKind::kChecker:
+      return makeTexture(kind, rng, n);
+  }
+  cv::GaussianBlur(f, f, cv::Size(0, 0), 1.0);
+  cv::Mat out;
+  f.convertTo(out, CV_8U);
+  return out;
+}
+
 float bilinear(const cv::Mat& img, double x, double y) {
   // Wrapping (tiled) bilinear lookup; texel centres at integer + 0.5.
   const int n = img.cols;
@@ -99,19 +207,22 @@ float bilinear(const cv::Mat& img, double x, double y) {
 
 }  // namespace
 
-TextureBank::TextureBank(std::uint64_t seed, int per_kind, int log2_size) {
-  cv::RNG rng(seed * 2654435761ull + 17);
+TextureBank::TextureBank(std::uint64_t seed, int per_kind, int log2_size, TextureStyle style) {
+  const bool validation = style == TextureStyle::kValidation;
+  cv::RNG rng(seed * 2654435761ull + (validation ? 9973 : 17));
   const int n = 1 << log2_size;
   const TextureKind kinds[] = {TextureKind::kFacade, TextureKind::kGround, TextureKind::kVehicle,
                                TextureKind::kConcrete, TextureKind::kChecker};
-  const double texel[] = {0.015, 0.01, 0.006, 0.012, 0.6 / (n / kCheckerSquares)};
+  const double standard_texel[] = {0.015, 0.01, 0.006, 0.012, 0.6 / (n / kCheckerSquares)};
+  const double validation_texel[] = {0.012, 0.008, 0.008, 0.01, 0.6 / (n / kCheckerSquares)};
+  const double* texel = validation ? validation_texel : standard_texel;
   by_kind_.resize(5);
   for (int k = 0; k < 5; ++k) {
     const int count = kinds[k] == TextureKind::kChecker ? 1 : per_kind;
     for (int i = 0; i < count; ++i) {
       Texture t;
       t.texel_m = texel[k];
-      t.levels.push_back(makeTexture(kinds[k], rng, n));
+      t.levels.push_back(validation ? makeValidationTexture(kinds[k], rng, n) : makeTexture(kinds[k], rng, n));
       while (t.levels.back().cols > 1) {
         cv::Mat half;
         cv::resize(t.levels.back(), half, cv::Size(t.levels.back().cols / 2, t.levels.back().rows / 2), 0, 0,

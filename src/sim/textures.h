@@ -11,6 +11,10 @@ namespace idyvins::sim {
 /// Kinds of texture the world uses.
 enum class TextureKind { kFacade, kGround, kVehicle, kConcrete, kChecker };
 
+/// Families of materials: the tuning suites' (shapes on smooth noise, window grids) and
+/// the validation suite's (bricks, fractal noise, cracks, painted lines, plainer vehicles).
+enum class TextureStyle { kStandard, kValidation };
+
 /// One texture: a square 8-bit image and its mip pyramid (level 0 = full size).
 struct Texture {
   std::vector<cv::Mat> levels;  ///< CV_8UC1, sizes N, N/2, ...
@@ -21,7 +25,8 @@ struct Texture {
 class TextureBank {
  public:
   /// Builds `per_kind` textures of each kind (plus one checkerboard) of size 2^log2_size.
-  TextureBank(std::uint64_t seed, int per_kind = 3, int log2_size = 10);
+  TextureBank(std::uint64_t seed, int per_kind = 3, int log2_size = 10,
+              TextureStyle style = TextureStyle::kStandard);
 
   /// Index of the i-th texture of a kind (i wraps).
   int index(TextureKind kind, int i) const;

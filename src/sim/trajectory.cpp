@@ -10,10 +10,39 @@ namespace idyvins::sim {
 
 using Eigen::Vector3d;
 
-Trajectory::Trajectory(const std::string& scene, std::uint64_t seed, double g_norm) : g_norm_(g_norm) {
+Trajectory::Trajectory(const std::string& scene, std::uint64_t seed, double g_norm, TrajectoryStyle style)
+    : style_(style), g_norm_(g_norm) {
   std::mt19937_64 rng(seed * 7919 + 3);
   std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
   const double two_pi = 2.0 * M_PI;
+  if (scene != "city" && scene != "parking_lot")
+    throw std::invalid_argument("unknown scene '" + scene + "' (expected city or parking_lot)");
+  if (style == TrajectoryStyle::kHandheld) {
+    // Walking at about 1.3 m/s with a 1.8 Hz gait (vertical bob 3 cm, sideways sway at half
+    // the step rate), the hand pitching and rolling a few degrees, looking around by ±0.5 rad.
+    const double step = two_pi * 1.8;
+    if (scene == "city") {
+      c0_ = {0.0, 0.0, 1.7};  // along the street near the centre line, below the trucks' roofs
+      c1_ = {1.3, 0.0, 0.0};
+      waves_[0] = {{{0.25 / (two_pi / 13.0), two_pi / 13.0, phase(rng)}, {0.02, step, phase(rng)}, {0, 1, 0}}};
+      waves_[1] = {{{0.5, two_pi / 17.0, phase(rng)}, {0.035, step / 2, phase(rng)}, {0, 1, 0}}};
+    } else {
+      // Clockwise around the garage centre, between the two traffic loops.
+      ellipse_ = true;
+      ell_a_ = 13.8;
+      ell_b_ = 8.1;
+      ell_w_ = -0.15;
+      ell_phase_ = phase(rng);
+      c0_ = {0.0, 0.0, 1.7};
+      waves_[0] = {{{0.3, two_pi / 7.0, phase(rng)}, {0.02, step, phase(rng)}, {0, 1, 0}}};
+      waves_[1] = {{{0.3, two_pi / 9.0, phase(rng)}, {0.035, step / 2, phase(rng)}, {0, 1, 0}}};
+    }
+    waves_[2] = {{{0.1, two_pi / 11.0, phase(rng)}, {0.03, step, phase(rng)}, {0, 1, 0}}};
+    yaw_wave_ = {0.5, two_pi / 9.0, phase(rng)};
+    pitch_waves_ = {{{0.08, two_pi / 6.3, phase(rng)}, {0.015, step, phase(rng)}}};
+    roll_waves_ = {{{0.05, two_pi / 5.1, phase(rng)}, {0.012, step / 2, phase(rng)}}};
+    return;
+  }
   if (scene == "city") {
     // Along the street (+x) at 1.4-2.6 m/s, close to the centre line, about 2.2 m up.
     c0_ = {0.0, 0.0, 2.2};
@@ -31,8 +60,6 @@ Trajectory::Trajectory(const std::string& scene, std::uint64_t seed, double g_no
     waves_[1] = {{{0.2, two_pi / 5.0, phase(rng)}, {0, 1, 0}, {0, 1, 0}}};
     waves_[2] = {{{0.1, two_pi / 4.0, phase(rng)}, {0, 1, 0}, {0, 1, 0}}};
     yaw_wave_ = {0.45, two_pi / 7.0, phase(rng)};
-  } else {
-    throw std::invalid_argument("unknown scene '" + scene + "' (expected city or parking_lot)");
   }
 }
 
@@ -64,6 +91,14 @@ double Trajectory::yaw(double t) const {
 Vector3d Trajectory::position(double t) const { return deriv(t, 0); }
 
 Eigen::Quaterniond Trajectory::orientation(double t) const {
+  if (style_ == TrajectoryStyle::kHandheld) {
+    double pitch = 0, roll = 0;
+    for (const Wave& w : pitch_waves_) pitch += w.amp * std::sin(w.omega * t + w.phase);
+    for (const Wave& w : roll_waves_) roll += w.amp * std::sin(w.omega * t + w.phase);
+    return (Eigen::AngleAxisd(yaw(t), Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Vector3d::UnitY()) *
+            Eigen::AngleAxisd(roll, Vector3d::UnitX()))
+        .normalized();
+  }
   const Vector3d z = (deriv(t, 2) + Vector3d(0, 0, g_norm_)).normalized();
   const double psi = yaw(t);
   const Vector3d h(std::cos(psi), std::sin(psi), 0.0);

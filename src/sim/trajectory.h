@@ -16,13 +16,21 @@ struct BodyState {
   Eigen::Vector3d omega_b;           ///< angular rate in the body frame (rad/s)
 };
 
-/// A trajectory p(t) = c0 + c1 t + Σ A sin(ω t + φ) per axis, yaw following the
-/// velocity heading plus an oscillation, roll/pitch from the thrust direction
-/// (a_w + g ẑ), as a quadrotor flies.
+/// How the rig is carried.
+enum class TrajectoryStyle {
+  kDrone,     ///< a quadrotor: roll/pitch from the thrust direction (the tuning suites)
+  kHandheld,  ///< walked by a person: gait bob and sway, looking around, roll/pitch of the hand
+};
+
+/// A trajectory p(t) = c0 + c1 t + Σ A sin(ω t + φ) per axis (plus an ellipse in the
+/// parking lot), yaw following the velocity heading plus an oscillation; roll/pitch
+/// from the thrust direction (a_w + g ẑ), as a quadrotor flies, or (handheld) small
+/// oscillations of the hand and the gait.
 class Trajectory {
  public:
   /// Trajectory for a scene ("city" or "parking_lot"), phases from the seed.
-  Trajectory(const std::string& scene, std::uint64_t seed, double g_norm = 9.81);
+  Trajectory(const std::string& scene, std::uint64_t seed, double g_norm = 9.81,
+             TrajectoryStyle style = TrajectoryStyle::kDrone);
   BodyState at(double t) const;
   Eigen::Quaterniond orientation(double t) const;
   Eigen::Vector3d position(double t) const;
@@ -40,6 +48,8 @@ class Trajectory {
   bool ellipse_ = false;  ///< parking lot: ellipse around the centre
   double ell_a_ = 14, ell_b_ = 8, ell_w_ = 0.19, ell_phase_ = 0;
   Wave yaw_wave_{0, 1, 0};
+  std::array<Wave, 2> pitch_waves_{}, roll_waves_{};  ///< handheld: pitch and roll (rad)
+  TrajectoryStyle style_ = TrajectoryStyle::kDrone;
   double g_norm_;
 };
 
