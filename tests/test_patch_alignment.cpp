@@ -76,12 +76,68 @@ TEST(PatchAlignment, RejectsFlatPatchesAndPatchesOffTheImage) {
   const cv::Mat flat(100, 100, CV_8U, cv::Scalar(128));
   EXPECT_FALSE(makePatchTemplate(flat, {50, 50}, 7).valid);
   const cv::Mat image = texture(5, 100);
-  EXPECT_FALSE(makePatchTemplate(image, {5, 50}, 7).valid);
-  const PatchTemplate tmpl = makePatchTemplate(image, {50, 50}, 7);
+  EXPECT_FALSE(makePatchTemplate(image, {5, 50}, 7).valid);  // the whole patch is asked by default
+  // Cut at the border: 7 of the 15 columns have a value and a gradient in the image, less than half.
+  EXPECT_FALSE(makePatchTemplate(image, {0.5, 50}, 7, 0.5).valid);
+  EXPECT_TRUE(makePatchTemplate(image, {5, 50}, 7, 0.5).valid);
+  const PatchTemplate tmpl = makePatchTemplate(image, {50, 50}, 7, 0.5);
   ASSERT_TRUE(tmpl.valid);
+  EXPECT_TRUE(tmpl.inside.empty());
   AffineWarp warp;
-  warp.t = {97, 50};  // the warped patch leaves the image
+  warp.t = {97, 50};  // the warped patch leaves the image: a failure unless a cut patch is allowed
   EXPECT_FALSE(alignAffine(tmpl, image, warp).converged);
+  AlignOptions cut;
+  cut.min_inside = 0.5;
+  warp.t = {99.5, 50};  // less than half of the warped patch is in the image
+  EXPECT_FALSE(alignAffine(tmpl, image, warp, cut).converged);
+}
+
+TEST(PatchAlignment, APatchCutAtTheBorderKeepsThePixelsInTheImage) {
+  const cv::Mat image0 = texture(11);
+  const Eigen::Vector2d c(3.0, 100.0);  // columns -4 .. 10: 1 .. 10 have a value and a gradient
+  const PatchTemplate tmpl = makePatchTemplate(image0, c, 7, 0.5);
+  ASSERT_TRUE(tmpl.valid);
+  ASSERT_EQ(tmpl.inside.size(), 225u);
+  int inside = 0;
+  for (unsigned char k : tmpl.inside) inside += k;
+  EXPECT_EQ(inside, 10 * 15);
+  // The surface moves 4.3 px inwards (the view turns): the cut patch finds it.
+  const Eigen::Vector2d shift(4.3, -1.2);
+  const cv::Mat image1 = warped(image0, Eigen::Matrix2d::Identity(), c, shift);
+  AffineWarp warp;
+  warp.t = c + shift + Eigen::Vector2d(0.8, 0.5);
+  const AlignResult r = alignAffine(tmpl, image1, warp);
+  ASSERT_TRUE(r.converged);
+  EXPECT_LT((warp.t - (c + shift)).norm(), 0.05);
+  EXPECT_GT(r.zncc, 0.98);
+}
+
+TEST(PatchAlignment, AWholePatchFollowsItsSurfaceToTheBorder) {
+  const cv::Mat image0 = texture(12);
+  const Eigen::Vector2d c(30.0, 120.0);
+  const PatchTemplate tmpl = makePatchTemplate(image0, c, 7);
+  ASSERT_TRUE(tmpl.valid);
+  // The surface moves to 4.4 px from the left border with a little scale: only the
+  // part of the warped patch in the image is used.
+  Eigen::Matrix2d A;
+  A << 1.05, 0.0, 0.0, 1.05;
+  const Eigen::Vector2d shift(-25.6, 2.1);
+  const cv::Mat image1 = warped(image0, A, c, shift);
+  AffineWarp warp;
+  warp.t = c + shift + Eigen::Vector2d(-0.7, 0.6);
+  AffineWarp whole_only = warp;
+  EXPECT_FALSE(alignAffine(tmpl, image1, whole_only).converged);  // by default the whole patch is asked
+  AlignOptions cut;
+  cut.min_inside = 0.5;
+  const AlignResult r = alignAffine(tmpl, image1, warp, cut);
+  ASSERT_TRUE(r.converged);
+  EXPECT_LT((warp.t - (c + shift)).norm(), 0.05);
+  EXPECT_GT(r.zncc, 0.98);
+  // Another surface there does not match.
+  AffineWarp other;
+  other.t = c + shift;
+  const AlignResult bad = alignAffine(tmpl, texture(13), other, cut);
+  EXPECT_FALSE(bad.converged && bad.zncc > 0.8);
 }
 
 TEST(PatchZncc, OneForTheSameSurfaceUnderGainAndShiftLowForAnotherAndMinusOneOffTheImage) {
@@ -94,6 +150,11 @@ TEST(PatchZncc, OneForTheSameSurfaceUnderGainAndShiftLowForAnotherAndMinusOneOff
   EXPECT_LT(patchZncc(image, {100, 100}, shifted, {116.25, 100}, 7), 0.8);
   EXPECT_LT(patchZncc(image, {100, 100}, texture(8), {100, 100}, 7), 0.5);
   EXPECT_EQ(patchZncc(image, {100, 100}, shifted, {195, 100}, 7), -1.0);
+  // Cut by the border: the offsets inside both images (11 of 15 columns here), when asked.
+  EXPECT_EQ(patchZncc(image, {3, 100}, shifted, {15.25, 100}, 7), -1.0);
+  EXPECT_GT(patchZncc(image, {3, 100}, shifted, {15.25, 100}, 7, 0.5), 0.98);
+  EXPECT_LT(patchZncc(image, {3, 100}, shifted, {19.25, 100}, 7, 0.5), 0.8);
+  EXPECT_EQ(patchZncc(image, {100, 100}, shifted, {199.5, 100}, 7, 0.5), -1.0);  // 7 of 15 columns inside
   const cv::Mat flat(200, 200, CV_8U, cv::Scalar(128));
   EXPECT_EQ(patchZncc(image, {100, 100}, flat, {100, 100}, 7), -1.0);
 }

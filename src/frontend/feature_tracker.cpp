@@ -34,6 +34,7 @@ bool stereoDepth(const Eigen::Vector2d& xy_l, const Eigen::Vector2d& xy_r, const
 }  // namespace
 
 FeatureTracker::FeatureTracker(const Config& config, const TrackerParams& params) : config_(config), params_(params) {
+
   for (const auto& c : config.cams) cams_.push_back(camera::makeCamera(c));
   if (config.num_cam == 2) {
     T_c1_c0_ = config.T_b_c[1].inverse() * config.T_b_c[0];
@@ -80,6 +81,12 @@ bool FeatureTracker::movesWithEliminated(const Track& t, const std::vector<Track
   return false;
 }
 
+AlignOptions FeatureTracker::alignOptions() const {
+  AlignOptions o;
+  o.min_inside = params_.patch_min_inside;
+  return o;
+}
+
 bool FeatureTracker::inBorder(const cv::Point2f& p) const {
   const int b = params_.border_px;
   return p.x >= b && p.y >= b && p.x < config_.image_width - b && p.y < config_.image_height - b;
@@ -112,7 +119,7 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Ma
     Eigen::Matrix2d A_patch = old.A_patch;
     if (params_.align_first_patch && old.patch) {
       AffineWarp warp{old.A_patch, toEigen(p1[i])};
-      const AlignResult r = alignAffine(*old.patch, image, warp);
+      const AlignResult r = alignAffine(*old.patch, image, warp, alignOptions());
       if (!r.converged || r.zncc < params_.min_patch_zncc ||
           (warp.t - toEigen(p1[i])).norm() > params_.max_patch_correction_px) {
         lost.push_back(&old);
@@ -220,7 +227,7 @@ std::vector<std::size_t> FeatureTracker::notFoundNearPrediction(const std::vecto
     double best_zncc = -1;  // best match of the first patch near the prediction
     auto foundFrom = [&](const Eigen::Vector2d& start) {
       AffineWarp warp{t.A_patch, start};
-      const AlignResult r = alignAffine(*t.patch, image, warp);
+      const AlignResult r = alignAffine(*t.patch, image, warp, alignOptions());
       if ((warp.t - pred).norm() > judged[i].tol_px) return false;
       best_zncc = std::max(best_zncc, r.zncc);
       return r.converged && r.zncc >= params_.min_patch_zncc;
@@ -290,10 +297,8 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
     cv::circle(mask, pt, r, cv::Scalar(0), cv::FILLED);
   }
   tracks = std::move(kept);
-  if (params_.align_first_patch && params_.corners_off_border) {
-    // No corner where its first patch cannot be cut: such a track would follow KLT
-    // alone and drift (a line meeting the image border also looks like a corner there).
-    const int b = std::min({params_.patch_half + 2, mask.cols / 2, mask.rows / 2});
+  if (params_.align_first_patch && params_.corner_margin_px > 0) {
+    const int b = std::min({params_.corner_margin_px, mask.cols / 2, mask.rows / 2});
     mask.rowRange(0, b).setTo(cv::Scalar(0));
     mask.rowRange(mask.rows - b, mask.rows).setTo(cv::Scalar(0));
     mask.colRange(0, b).setTo(cv::Scalar(0));
@@ -312,7 +317,8 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
     if (!inBorder(c) || !cams_[0]->liftToNormalized(toEigen(c), xy)) continue;
     Track t{next_id_++, c, xy, 1, nullptr, Eigen::Matrix2d::Identity(), false, Eigen::Vector2d::Zero()};
     if (params_.align_first_patch) {
-      auto patch = std::make_shared<PatchTemplate>(makePatchTemplate(image, toEigen(c), params_.patch_half));
+      auto patch = std::make_shared<PatchTemplate>(
+          makePatchTemplate(image, toEigen(c), params_.patch_half, params_.patch_min_inside));
       if (patch->valid) t.patch = std::move(patch);
     }
     tracks.push_back(std::move(t));
@@ -383,10 +389,11 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
     bool ok = status[i] != 0;
     if (ok && config_.tracker.flow_back) ok = status_back[i] && cv::norm(back[i] - pl[i]) <= params_.flow_back_px;
     if (ok && config_.tracker.stereo_refine) {
-      const PatchTemplate tmpl = makePatchTemplate(left_pyr[0], feat.uv, params_.patch_half);
+      const PatchTemplate tmpl = makePatchTemplate(left_pyr[0], feat.uv, params_.patch_half, params_.patch_min_inside);
       AffineWarp warp;
       warp.t = toEigen(pr[i]);
-      if (tmpl.valid && alignAffine(tmpl, right_pyr[0], warp).converged && (warp.t - toEigen(pr[i])).norm() < 1.0)
+      if (tmpl.valid && alignAffine(tmpl, right_pyr[0], warp, alignOptions()).converged &&
+          (warp.t - toEigen(pr[i])).norm() < 1.0)
         pr[i] = cv::Point2f(static_cast<float>(warp.t.x()), static_cast<float>(warp.t.y()));
     }
     Eigen::Vector2d xy_r;
@@ -397,7 +404,8 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
     const double dist = std::abs(x1.dot(line)) / std::max(line.head<2>().norm(), 1e-12);
     if (dist * f > config_.tracker.stereo_epipolar_px) continue;
     if (params_.stereo_min_zncc > -1.0 &&
-        patchZncc(left_pyr[0], feat.uv, right_pyr[0], toEigen(pr[i]), params_.patch_half) < params_.stereo_min_zncc)
+        patchZncc(left_pyr[0], feat.uv, right_pyr[0], toEigen(pr[i]), params_.patch_half, params_.patch_min_inside) <
+            params_.stereo_min_zncc)
       continue;
     feat.has_right = true;
     feat.uv_right = toEigen(pr[i]);

@@ -68,12 +68,20 @@ struct TrackerParams {
   int patch_half = 7;                 ///< template of (2 half + 1)² px
   double min_patch_zncc = 0.8;        ///< below: the track is dropped
   double max_patch_correction_px = 2.0;  ///< KLT and alignment disagree by more: dropped
-  /// With align_first_patch: no corner is detected within patch_half + 2 px of the image
-  /// border, where its first patch cannot be cut. Such a track followed KLT alone and
-  /// drifted (an edge meeting the border also looks like a corner to the detector, whose
-  /// gradients reflect at the border). Measured on 100 frames of city none (clean): p99
-  /// of the true projection error 1.20 -> 0.65 px; at realism euroc 2.52 -> 0.83 px.
-  bool corners_off_border = true;
+  /// With align_first_patch, no corner is detected within this many px of the image border. The default,
+  /// patch_half + 2, keeps every first patch whole: a corner nearer the border used to
+  /// have no first patch and followed KLT alone, drifting 0.3-0.5 px per frame (and the
+  /// detector's gradients reflect at the border, so an edge meeting it looks like a
+  /// corner). Values and measurements: docs/method.md ("Corners at the border").
+  int corner_margin_px = 9;
+  /// Share of a first patch that must lie in the image (AlignOptions::min_inside). 1: the
+  /// whole patch (a track is dropped when its patch reaches the border; stereo ZNCC needs
+  /// both patches whole). Below 1: corners nearer the border than patch_half keep the part
+  /// of their patch in the image, tracks keep aligning on the pixels in the image until
+  /// less than this share remains, and the stereo ZNCC uses the offsets inside both images.
+  /// Measured with corner_margin_px 2 on the standard and validation suites, and left at 1
+  /// (docs/method.md).
+  double patch_min_inside = 1.0;
   /// With judge_lost_new_tracks and keep_following_eliminated (IDY modes): a corner in
   /// its second frame that the min_dist pruning drops next to a followed eliminated
   /// track, and whose displacement since its first frame agrees with that track's within
@@ -190,6 +198,7 @@ class FeatureTracker {
   void matchRight(const std::vector<cv::Mat>& left_pyr, std::vector<Feature>& features,
                   const std::vector<std::size_t>* which = nullptr, const std::vector<PrevObs>* prev_obs = nullptr);
   bool inBorder(const cv::Point2f& p) const;
+  AlignOptions alignOptions() const;  ///< first-patch alignment with params_.patch_min_inside
 
   Config config_;
   TrackerParams params_;

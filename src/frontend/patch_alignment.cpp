@@ -40,12 +40,46 @@ bool normalize(std::vector<float>& v) {
 
 }  // namespace
 
+namespace {
+
+/// ZNCC from the sums over `count` pixel pairs; -1 when either side is (almost) flat.
+double znccFromSums(double sa, double sb, double saa, double sbb, double sab, int count) {
+  const double va = saa - sa * sa / count, vb = sbb - sb * sb / count;
+  // Below ~1 gray level of standard deviation there is nothing to correlate (as normalize()).
+  if (va < count || vb < count) return -1.0;
+  return (sab - sa * sb / count) / std::sqrt(va * vb);
+}
+
+/// patchZncc over the offsets at which both points lie in their images (bilinear).
+double patchZnccAtBorder(const cv::Mat& a, const Eigen::Vector2d& uv_a, const cv::Mat& b, const Eigen::Vector2d& uv_b,
+                         int half, double min_inside) {
+  const int n = 2 * half + 1;
+  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+  int count = 0;
+  for (int dy = -half; dy <= half; ++dy)
+    for (int dx = -half; dx <= half; ++dx) {
+      float xa, xb;
+      if (!sample(a, uv_a.x() + dx, uv_a.y() + dy, xa) || !sample(b, uv_b.x() + dx, uv_b.y() + dy, xb)) continue;
+      sa += xa;
+      sb += xb;
+      saa += static_cast<double>(xa) * xa;
+      sbb += static_cast<double>(xb) * xb;
+      sab += static_cast<double>(xa) * xb;
+      ++count;
+    }
+  if (count < min_inside * n * n) return -1.0;
+  return znccFromSums(sa, sb, saa, sbb, sab, count);
+}
+
+}  // namespace
+
 double patchZncc(const cv::Mat& a, const Eigen::Vector2d& uv_a, const cv::Mat& b, const Eigen::Vector2d& uv_b,
-                 int half) {
+                 int half, double min_inside) {
   const auto inside = [half](const cv::Mat& m, const Eigen::Vector2d& uv) {
     return uv.x() - half >= 0.0 && uv.y() - half >= 0.0 && uv.x() + half < m.cols - 1 && uv.y() + half < m.rows - 1;
   };
-  if (!inside(a, uv_a) || !inside(b, uv_b)) return -1.0;
+  if (!inside(a, uv_a) || !inside(b, uv_b))
+    return min_inside < 1.0 ? patchZnccAtBorder(a, uv_a, b, uv_b, half, min_inside) : -1.0;
   const int n = 2 * half + 1;
   cv::Mat pa, pb;  // bilinear patches centred on the points (OpenCV's vectorized resampling)
   cv::getRectSubPix(a, cv::Size(n, n), cv::Point2f(static_cast<float>(uv_a.x()), static_cast<float>(uv_a.y())), pa,
@@ -63,34 +97,72 @@ double patchZncc(const cv::Mat& a, const Eigen::Vector2d& uv_a, const cv::Mat& b
     sbb += static_cast<double>(xb[k]) * xb[k];
     sab += static_cast<double>(xa[k]) * xb[k];
   }
-  const double va = saa - sa * sa / count, vb = sbb - sb * sb / count;
-  // Below ~1 gray level of standard deviation there is nothing to correlate (as normalize()).
-  if (va < count || vb < count) return -1.0;
-  return (sab - sa * sb / count) / std::sqrt(va * vb);
+  return znccFromSums(sa, sb, saa, sbb, sab, count);
 }
 
-PatchTemplate makePatchTemplate(const cv::Mat& image, const Eigen::Vector2d& uv_center, int half) {
+namespace {
+
+/// Whether an LDLT factorization of a Gauss-Newton Hessian is usable (texture in both directions).
+bool wellConditioned(const Eigen::LDLT<Eigen::Matrix<double, 6, 6>>& ldlt) {
+  return ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 1e-9 * ldlt.vectorD().maxCoeff();
+}
+
+}  // namespace
+
+PatchTemplate makePatchTemplate(const cv::Mat& image, const Eigen::Vector2d& uv_center, int half, double min_inside) {
   PatchTemplate tmpl;
   tmpl.half = half;
   const int n = 2 * half + 1, m = n + 2;  // with a 1 px margin for the gradients
   std::vector<float> big(static_cast<std::size_t>(m) * m);
+  std::vector<unsigned char> got(big.size(), 1);
+  bool whole = true;
   for (int r = 0; r < m; ++r)
     for (int c = 0; c < m; ++c)
-      if (!sample(image, uv_center.x() + c - half - 1, uv_center.y() + r - half - 1, big[r * m + c])) return tmpl;
-  tmpl.values.resize(static_cast<std::size_t>(n) * n);
+      if (!sample(image, uv_center.x() + c - half - 1, uv_center.y() + r - half - 1, big[r * m + c])) {
+        got[r * m + c] = 0;
+        whole = false;
+      }
+  // A pixel is kept when its value and the four neighbours of its gradient are in the image.
+  const std::size_t count = static_cast<std::size_t>(n) * n;
+  std::vector<unsigned char> inside(count, 1);
+  std::size_t kept = count;
+  if (!whole) {
+    kept = 0;
+    for (int r = 0; r < n; ++r)
+      for (int c = 0; c < n; ++c) {
+        const int k = (r + 1) * m + c + 1;
+        inside[r * n + c] = got[k] && got[k - 1] && got[k + 1] && got[k - m] && got[k + m];
+        kept += inside[r * n + c];
+      }
+    if (min_inside >= 1.0 || kept < min_inside * count) return tmpl;
+    tmpl.inside = inside;
+    tmpl.min_inside = min_inside;
+  }
+  tmpl.values.assign(count, 0.f);
   for (int r = 0; r < n; ++r)
-    for (int c = 0; c < n; ++c) tmpl.values[r * n + c] = big[(r + 1) * m + c + 1];
-  // The normalization is affine in the intensities: apply the same scale to the gradients.
+    for (int c = 0; c < n; ++c)
+      if (inside[r * n + c]) tmpl.values[r * n + c] = big[(r + 1) * m + c + 1];
+  // Zero mean and unit norm over the pixels kept; the normalization is affine in the
+  // intensities: the same scale applies to the gradients.
   double mean = 0, ss = 0;
-  for (float x : tmpl.values) mean += x;
-  mean /= static_cast<double>(tmpl.values.size());
-  for (float x : tmpl.values) ss += (x - mean) * (x - mean);
-  if (!normalize(tmpl.values)) return tmpl;
+  for (std::size_t k = 0; k < count; ++k) mean += tmpl.values[k];
+  mean /= static_cast<double>(kept);
+  for (std::size_t k = 0; k < count; ++k)
+    if (inside[k]) ss += (tmpl.values[k] - mean) * (tmpl.values[k] - mean);
+  if (whole) {
+    if (!normalize(tmpl.values)) return tmpl;
+  } else {
+    // Below ~1 gray level of standard deviation there is nothing to align (as normalize()).
+    if (ss < static_cast<double>(kept)) return tmpl;
+    for (std::size_t k = 0; k < count; ++k)
+      tmpl.values[k] = inside[k] ? static_cast<float>((tmpl.values[k] - mean) / std::sqrt(ss)) : 0.f;
+  }
   const double scale = 1.0 / std::sqrt(ss);
-  tmpl.sd.resize(6 * tmpl.values.size());
+  tmpl.sd.assign(6 * count, 0.f);
   Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
   for (int r = 0; r < n; ++r)
     for (int c = 0; c < n; ++c) {
+      if (!inside[r * n + c]) continue;
       const double gx = 0.5 * scale * (big[(r + 1) * m + c + 2] - big[(r + 1) * m + c]);
       const double gy = 0.5 * scale * (big[(r + 2) * m + c + 1] - big[r * m + c + 1]);
       const double x = c - half, y = r - half;
@@ -100,7 +172,7 @@ PatchTemplate makePatchTemplate(const cv::Mat& image, const Eigen::Vector2d& uv_
       for (int k = 0; k < 6; ++k) tmpl.sd[6 * (r * n + c) + k] = static_cast<float>(s[k]);
     }
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
-  if (ldlt.info() != Eigen::Success || ldlt.vectorD().minCoeff() <= 1e-9 * ldlt.vectorD().maxCoeff()) return tmpl;
+  if (!wellConditioned(ldlt)) return tmpl;
   tmpl.H_inv = ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity());
   tmpl.valid = true;
   return tmpl;
@@ -147,42 +219,114 @@ bool warpPatch(const cv::Mat& image, const AffineWarp& warp, int half, std::vect
   return true;
 }
 
+
+/// One Gauss-Newton step of a whole template whose warped patch lies in the image (the
+/// precomputed inverse Hessian): false when the warped patch is flat.
+bool stepWhole(const PatchTemplate& tmpl, std::vector<float>& warped, Eigen::Matrix<double, 6, 1>& dp, double& zncc_out) {
+  const std::size_t count = tmpl.values.size();
+  // Normalize (zero mean, unit norm), then the error against the template and the
+  // steepest-descent sums, in one pass over the normalized values.
+  float sum = 0.f;
+  for (float x : warped) sum += x;
+  const float mean = sum / static_cast<float>(count);
+  float ss = 0.f;
+  for (float& x : warped) {
+    x -= mean;
+    ss += x * x;
+  }
+  // Below ~1 gray level of standard deviation there is nothing to align.
+  if (ss < static_cast<float>(count)) return false;
+  const float scale = 1.f / std::sqrt(ss);
+  float b[6] = {0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
+  float zncc = 0.f;
+  const float* t = tmpl.values.data();
+  const float* sd = tmpl.sd.data();
+  for (std::size_t i = 0; i < count; ++i, sd += 6) {
+    const float w = warped[i] * scale;
+    const float e = w - t[i];
+    zncc += w * t[i];
+    for (int k = 0; k < 6; ++k) b[k] += sd[k] * e;
+  }
+  zncc_out = zncc;
+  dp = tmpl.H_inv * Eigen::Map<const Eigen::Matrix<float, 6, 1>>(b).cast<double>();
+  return true;
+}
+
+/// One Gauss-Newton step over the template pixels that are in the template and whose
+/// warped position is in the image (a patch at the border): both sides normalized over
+/// those pixels, the Hessian built from them. False when too few remain or either side
+/// is flat or without texture in both directions.
+bool stepMasked(const PatchTemplate& tmpl, const cv::Mat& image, const AffineWarp& warp, double min_inside,
+                Eigen::Matrix<double, 6, 1>& dp, double& zncc_out) {
+  const int half = tmpl.half, n = 2 * half + 1;
+  std::vector<int> used;
+  std::vector<float> w;
+  used.reserve(static_cast<std::size_t>(n) * n);
+  w.reserve(static_cast<std::size_t>(n) * n);
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) {
+      const int k = r * n + c;
+      if (!tmpl.inside.empty() && !tmpl.inside[static_cast<std::size_t>(k)]) continue;
+      const Eigen::Vector2d uv = warp.A * Eigen::Vector2d(c - half, r - half) + warp.t;
+      float value;
+      if (!sample(image, uv.x(), uv.y(), value)) continue;
+      used.push_back(k);
+      w.push_back(value);
+    }
+  const double kept = static_cast<double>(used.size());
+  if (kept < min_inside * n * n) return false;
+  double t_mean = 0, w_mean = 0;
+  for (std::size_t i = 0; i < used.size(); ++i) {
+    t_mean += tmpl.values[static_cast<std::size_t>(used[i])];
+    w_mean += w[i];
+  }
+  t_mean /= kept;
+  w_mean /= kept;
+  double t_ss = 0, w_ss = 0;
+  for (std::size_t i = 0; i < used.size(); ++i) {
+    const double dt = tmpl.values[static_cast<std::size_t>(used[i])] - t_mean, dw = w[i] - w_mean;
+    t_ss += dt * dt;
+    w_ss += dw * dw;
+  }
+  // Below ~1 gray level of standard deviation there is nothing to align (the template's
+  // values are normalized: a flat subset has almost no spread left).
+  if (w_ss < kept || t_ss < 1e-6) return false;
+  const double t_scale = 1.0 / std::sqrt(t_ss), w_scale = 1.0 / std::sqrt(w_ss);
+  Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+  double zncc = 0;
+  for (std::size_t i = 0; i < used.size(); ++i) {
+    const std::size_t k = static_cast<std::size_t>(used[i]);
+    const Eigen::Matrix<double, 6, 1> s =
+        t_scale * Eigen::Map<const Eigen::Matrix<float, 6, 1>>(tmpl.sd.data() + 6 * k).cast<double>();
+    const double tv = (tmpl.values[k] - t_mean) * t_scale, wv = (w[i] - w_mean) * w_scale;
+    H.noalias() += s * s.transpose();
+    b += s * (wv - tv);
+    zncc += wv * tv;
+  }
+  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
+  if (!wellConditioned(ldlt)) return false;
+  dp = ldlt.solve(b);
+  zncc_out = zncc;
+  return true;
+}
+
 }  // namespace
 
 AlignResult alignAffine(const PatchTemplate& tmpl, const cv::Mat& image, AffineWarp& warp,
                         const AlignOptions& options) {
   AlignResult res;
   if (!tmpl.valid) return res;
-  const int half = tmpl.half;
-  const std::size_t count = tmpl.values.size();
-  std::vector<float> warped(count);
+  std::vector<float> warped(tmpl.values.size());
+  const double min_inside = std::min(options.min_inside, tmpl.min_inside);
   for (res.iterations = 1; res.iterations <= options.max_iterations; ++res.iterations) {
-    if (!warpPatch(image, warp, half, warped)) return res;
-    // Normalize (zero mean, unit norm), then the error against the template and the
-    // steepest-descent sums, in one pass over the normalized values.
-    float sum = 0.f;
-    for (float x : warped) sum += x;
-    const float mean = sum / static_cast<float>(count);
-    float ss = 0.f;
-    for (float& x : warped) {
-      x -= mean;
-      ss += x * x;
-    }
-    // Below ~1 gray level of standard deviation there is nothing to align.
-    if (ss < static_cast<float>(count)) return res;
-    const float scale = 1.f / std::sqrt(ss);
-    float b[6] = {0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
-    float zncc = 0.f;
-    const float* t = tmpl.values.data();
-    const float* sd = tmpl.sd.data();
-    for (std::size_t i = 0; i < count; ++i, sd += 6) {
-      const float w = warped[i] * scale;
-      const float e = w - t[i];
-      zncc += w * t[i];
-      for (int k = 0; k < 6; ++k) b[k] += sd[k] * e;
-    }
+    Eigen::Matrix<double, 6, 1> dp;
+    double zncc = -1.0;
+    const bool whole = tmpl.inside.empty() && warpPatch(image, warp, tmpl.half, warped);
+    if (!whole && min_inside >= 1.0) return res;  // leaves the image
+    if (!(whole ? stepWhole(tmpl, warped, dp, zncc) : stepMasked(tmpl, image, warp, min_inside, dp, zncc)))
+      return res;
     res.zncc = zncc;
-    const Eigen::Matrix<double, 6, 1> dp = tmpl.H_inv * Eigen::Map<const Eigen::Matrix<float, 6, 1>>(b).cast<double>();
     Eigen::Matrix2d D;
     D << 1.0 + dp[0], dp[1], dp[2], 1.0 + dp[3];
     if (std::abs(D.determinant()) < 1e-6) return res;

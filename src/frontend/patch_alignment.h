@@ -22,13 +22,17 @@ struct AffineWarp {
 
 /// A square patch of (2 half + 1)² pixels with what inverse-compositional
 /// alignment precomputes: zero-mean, unit-norm intensities, steepest-descent
-/// images and the inverse Gauss-Newton Hessian.
+/// images and the inverse Gauss-Newton Hessian. A patch cut at the image border
+/// marks the pixels it holds in `inside`; its values, steepest-descent images and
+/// Hessian are then those of the pixels inside (the others are 0).
 struct PatchTemplate {
   int half = 0;
   std::vector<float> values;     ///< normalized intensities, row-major
   std::vector<float> sd;         ///< 6 steepest-descent values per pixel
   Eigen::Matrix<double, 6, 6> H_inv;
-  bool valid = false;            ///< false: off the image or without texture
+  std::vector<unsigned char> inside;  ///< per pixel, 1 = in the image; empty: the whole square
+  double min_inside = 1.0;  ///< the share asked when it was cut (alignAffine asks no more of it)
+  bool valid = false;            ///< false: too little of it in the image, or without texture
 };
 
 /// Options of alignAffine.
@@ -36,6 +40,11 @@ struct AlignOptions {
   int max_iterations = 10;
   double epsilon_px = 0.01;          ///< stops when the centre moves less than this
   double max_scale_change = 3.0;     ///< singular values of A outside [1/this, this]: diverged
+  /// Share of the template's square that must lie in the image (and in the template) at
+  /// every iteration; 1: the whole warped patch in the image, else failure. Below 1, an
+  /// iteration whose warped patch is cut by the border uses the pixels inside both, its
+  /// Hessian built from them.
+  double min_inside = 1.0;
 };
 
 /// Result of alignAffine: whether it converged and how well the patch matches.
@@ -46,21 +55,28 @@ struct AlignResult {
 };
 
 /// Cuts the template around `uv_center` (px, may be subpixel; bilinear) from a
-/// CV_8UC1 image. Invalid when the patch (plus a 1 px margin) leaves the image
-/// or has (almost) no texture.
-PatchTemplate makePatchTemplate(const cv::Mat& image, const Eigen::Vector2d& uv_center, int half);
+/// CV_8UC1 image. Invalid when the patch (plus a 1 px margin) leaves the image, unless
+/// `min_inside` < 1: then the pixels whose value and gradient lie in the image are kept
+/// (`inside`) when they are at least that share of the square. Invalid as well when the
+/// patch has (almost) no texture (in both directions).
+PatchTemplate makePatchTemplate(const cv::Mat& image, const Eigen::Vector2d& uv_center, int half,
+                                double min_inside = 1.0);
 
 /// Refines `warp` so that the image under it matches the template (gain and
 /// bias invariant). `warp` holds the initial guess and, on return, the last
-/// iterate. Never throws; non-convergence or leaving the image is reported.
+/// iterate. A template cut at the border, or a warp leaving the image with
+/// `options.min_inside` < 1, is aligned on the pixels inside both (AlignOptions).
+/// Never throws; non-convergence or leaving the image is reported.
 AlignResult alignAffine(const PatchTemplate& tmpl, const cv::Mat& image, AffineWarp& warp,
                         const AlignOptions& options = {});
 
 /// Zero-mean normalized cross-correlation of the (2 half + 1)² patches (bilinear) around
 /// `uv_a` in `a` and `uv_b` in `b` (CV_8UC1); -1 when a patch leaves its image or is flat.
+/// With `min_inside` < 1, a patch cut by the border is correlated over the offsets at
+/// which both points lie in their images, when they are at least that share of the square.
 /// Gain and bias invariant, no warp: for two views of the same surface seen alike
 /// (a stereo match).
 double patchZncc(const cv::Mat& a, const Eigen::Vector2d& uv_a, const cv::Mat& b, const Eigen::Vector2d& uv_b,
-                 int half);
+                 int half, double min_inside = 1.0);
 
 }  // namespace idyvins::frontend
