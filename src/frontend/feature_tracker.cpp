@@ -34,7 +34,6 @@ bool stereoDepth(const Eigen::Vector2d& xy_l, const Eigen::Vector2d& xy_r, const
 }  // namespace
 
 FeatureTracker::FeatureTracker(const Config& config, const TrackerParams& params) : config_(config), params_(params) {
-
   for (const auto& c : config.cams) cams_.push_back(camera::makeCamera(c));
   if (config.num_cam == 2) {
     T_c1_c0_ = config.T_b_c[1].inverse() * config.T_b_c[0];
