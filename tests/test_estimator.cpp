@@ -348,6 +348,38 @@ TEST(Initializer, AlignmentRecoversGravityAndVelocityFromExactData) {
   EXPECT_LT((solveGyroBias(q, ptrs_b) - bg).norm(), 2e-4);
 }
 
+TEST(Initializer, RotationAlignmentRecoversTheCameraImuTimeOffset) {
+  // A walked trajectory (its rotation rate changes with the gait and the look-around), a
+  // gyroscope bias, frames stamped td before their capture on the IMU clock.
+  sim::SimOptions o = options("city", 1.5);
+  o.imu.scale = 0.0;
+  const sim::Trajectory traj("city", 1, 9.81, sim::TrajectoryStyle::kHandheld);
+  std::vector<ImuSample> imu;
+  std::vector<GroundTruthState> gt;
+  sim::synthesizeImu(traj, o, imu, gt);
+  for (auto& s : imu) s.gyr_b += Vector3d(0.01, -0.02, 0.015);
+  for (double td : {-0.012, 0.0, 0.0074, 0.02}) {
+    std::vector<Eigen::Quaterniond> q;
+    std::vector<TimeNs> t;
+    for (int k = 0; k <= 10; ++k) {
+      const double t_capture = 0.2 + 0.05 * k;
+      q.push_back(traj.at(t_capture).q_w_b);
+      t.push_back(imu.front().t_ns + static_cast<TimeNs>(std::llround((t_capture - td) * 1e9)));
+    }
+    const std::optional<double> found = alignRotationTimes(q, t, imu, 0.03);
+    ASSERT_TRUE(found.has_value()) << td;
+    EXPECT_NEAR(*found, td, 2e-4) << td;
+  }
+  // Out of range: the best shift lies on the edge and nothing is returned.
+  std::vector<Eigen::Quaterniond> q;
+  std::vector<TimeNs> t;
+  for (int k = 0; k <= 10; ++k) {
+    q.push_back(traj.at(0.2 + 0.05 * k).q_w_b);
+    t.push_back(imu.front().t_ns + static_cast<TimeNs>(std::llround((0.2 + 0.05 * k - 0.06) * 1e9)));
+  }
+  EXPECT_FALSE(alignRotationTimes(q, t, imu, 0.03).has_value());
+}
+
 TEST(FeatureManager, TriangulationAndReanchoring) {
   Rig rig;
   rig.T_b_c0.q_b_c = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Vector3d::UnitY()));

@@ -119,6 +119,48 @@ TEST(ProjectionFactors, JacobiansMatchNumericAtRandomStates) {
   }
 }
 
+TEST(ProjectionFactorsTd, JacobiansMatchNumericIncludingTheTimeOffset) {
+  double scale = 2.5;
+  for (int t = 0; t < 50; ++t) {
+    ProjectionSetup s = randomProjection();
+    ProjectionWeight w{460.0, 1.5, t % 2 ? &scale : nullptr};
+    // Image velocities up to ~1/s on the normalized plane (fast rotation), offsets of ±30 ms.
+    const TimedObservation i{s.xy_i, Vector2d(uni(-1, 1), uni(-1, 1)), uni(-0.03, 0.03)};
+    const TimedObservation j{s.xy_j, Vector2d(uni(-1, 1), uni(-1, 1)), uni(-0.03, 0.03)};
+    const TimedObservation jr{s.xy_j_right, Vector2d(uni(-1, 1), uni(-1, 1)), j.td_obs};
+    const TimedObservation ir{s.xy_i_right, Vector2d(uni(-1, 1), uni(-1, 1)), i.td_obs};
+    double td = uni(-0.03, 0.03);
+    ProjectionTwoFrameTd one(i, j, s.ex0, s.ex0, w);
+    ProjectionTwoFrameTd two(i, jr, s.ex0, s.ex1, w);
+    ProjectionOneFrameTwoCamTd stereo(i, ir, s.ex0, s.ex1, w);
+    test::checkCostFunction(one, {s.pose_i.data(), s.pose_j.data(), &s.inv_depth, &td}, 1e-6, "2f1c td");
+    test::checkCostFunction(two, {s.pose_i.data(), s.pose_j.data(), &s.inv_depth, &td}, 1e-6, "2f2c td");
+    test::checkCostFunction(stereo, {&s.inv_depth, &td}, 1e-6, "1f2c td");
+  }
+}
+
+TEST(ProjectionFactorsTd, MovesEachObservationAlongItsVelocityByTheOffsetChange) {
+  ProjectionSetup s = randomProjection();
+  const ProjectionWeight w{460.0, 1.5, nullptr};
+  const TimedObservation i{s.xy_i, Vector2d(0.4, -0.2), 0.002}, j{s.xy_j, Vector2d(-0.3, 0.5), 0.006};
+  ProjectionTwoFrameTd timed(i, j, s.ex0, s.ex0, w);
+  double td = 0.012;
+  const double* params[] = {s.pose_i.data(), s.pose_j.data(), &s.inv_depth, &td};
+  Vector2d r_timed, r_fixed;
+  ASSERT_TRUE(timed.Evaluate(params, r_timed.data(), nullptr));
+  // The fixed-offset factor at xy − (td − td_obs)·v gives the same residual.
+  ProjectionTwoFrame fixed(s.xy_i - 0.010 * i.velocity, s.xy_j - 0.006 * j.velocity, s.ex0, s.ex0, w);
+  ASSERT_TRUE(fixed.Evaluate(params, r_fixed.data(), nullptr));
+  EXPECT_LT((r_timed - r_fixed).norm(), 1e-12);
+  // At the offsets the observations were stamped with, nothing moves.
+  ProjectionTwoFrameTd still({s.xy_i, i.velocity, td}, {s.xy_j, j.velocity, td}, s.ex0, s.ex0, w);
+  ProjectionTwoFrame plain(s.xy_i, s.xy_j, s.ex0, s.ex0, w);
+  ASSERT_TRUE(still.Evaluate(params, r_timed.data(), nullptr));
+  ASSERT_TRUE(plain.Evaluate(params, r_fixed.data(), nullptr));
+  EXPECT_LT((r_timed - r_fixed).norm(), 1e-12);
+  EXPECT_GT(r_fixed.norm(), 0.0);
+}
+
 TEST(ProjectionFactors, ResidualIsTheNormalizedReprojectionErrorInPixels) {
   ProjectionSetup s = randomProjection();
   ProjectionTwoFrame f(s.xy_i, s.xy_j, s.ex0, s.ex0, {460.0, 1.5, nullptr});

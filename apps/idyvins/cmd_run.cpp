@@ -117,6 +117,9 @@ nlohmann::json summaryJson(const pipeline::Result& r, Mode mode, double wall_s) 
           {"poses", r.trajectory.size()},
           {"initialized_at_s", s.init_t_ns >= 0 ? toSeconds(s.init_t_ns - s.first_t_ns) : -1.0},
           {"frames_without_prior", s.frames_without_prior},
+          {"frames_beyond_imu", s.frames_beyond_imu},
+          {"td_s", s.td_s},
+          {"td_estimated", s.td_estimated},
           {"lost_new_corners_tested", s.lost_tested},
           {"lost_new_corners_moving", s.lost_moving},
           {"map_static_points", r.static_map.size()},
@@ -151,6 +154,11 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
                 s["poses"].get<std::size_t>(), s["resets"].size());
   else
     std::printf("not initialized: %s\n", s["last_status"].get<std::string>().c_str());
+  if (s["td_estimated"].get<bool>())
+    std::printf("camera-IMU time offset td estimated: %.3f ms at the end\n", 1e3 * s["td_s"].get<double>());
+  if (s["frames_beyond_imu"].get<std::size_t>() > 0)
+    std::printf("warning: %zu frame(s) at the end not processed: their time (stamp + td) is after the last IMU sample\n",
+                s["frames_beyond_imu"].get<std::size_t>());
   std::printf("mean tracking %.2f ms, filter %.3f ms, optimization %.2f ms, marginalization %.2f ms per frame\n",
               s["mean_tracking_ms"].get<double>(), s["mean_filter_ms"].get<double>(),
               s["mean_optimization_ms"].get<double>(), s["mean_marginalization_ms"].get<double>());

@@ -17,7 +17,7 @@ namespace {
 struct SimulateArgs {
   std::string scene = "city", level = "none", out;
   std::uint64_t seed = 1;
-  double duration = 60.0, noise = 1.0, image_noise = 2.0;
+  double duration = 60.0, noise = 1.0, image_noise = 2.0, td_ms = 0.0;
   int threads = 2;
   bool opening_vehicle = false, standard_set = false;
   std::string format = "euroc", compression = "none", viode_tables = IDYVINS_VIODE_TABLES;
@@ -70,6 +70,7 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
   o.scene.seed = a.seed;
   o.scene.opening_vehicle = a.opening_vehicle;
   o.duration_s = a.duration;
+  o.td_s = 1e-3 * a.td_ms;
   o.imu.scale = a.noise;
   o.image_noise_sigma = a.image_noise;
   o.realism = sim::realismPreset(a.realism);
@@ -142,6 +143,11 @@ void registerSimulate(CLI::App& app, int& exit_code) {
                   "mount errors, VINS-Fusion's EuRoC IMU noise keys in the config, other materials (bricks,\n"
                   "fractal asphalt and concrete, plainer vehicles) and a handheld (walking) trajectory")
       ->check(CLI::IsMember({"standard", "validation"}));
+  cmd->add_option("--td-ms", a->td_ms,
+                  "camera-IMU time offset of the written data (ms): image stamps are the capture times on the\n"
+                  "IMU clock minus this, so a config's td of this value is right (VINS-Fusion's convention: image\n"
+                  "clock + td = IMU clock). The written config keeps td: 0; meta.json records the truth")
+      ->check(CLI::Range(-100.0, 100.0));
   cmd->add_option("--threads", a->threads, "rendering threads")->check(CLI::Range(1, 64));
   cmd->add_option("--format", a->format,
                   "euroc (default): the EuRoC folder; bag: OUT/<k>_<level>.bag (VIODE's names) with VIODE's topics\n"

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <deque>
 #include <functional>
+#include <optional>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <unordered_map>
@@ -31,28 +32,56 @@ Extrinsic toExtrinsic(const Isometry3d& T) {
   return e;
 }
 
-/// The projection factors of one landmark: (cost, block list, whether the pose blocks are involved).
+/// One projection factor of a landmark; its blocks are (pose of the anchor frame, pose of
+/// `frame`, inverse depth) or, for the stereo factor within the anchor frame (frame −1),
+/// the inverse depth alone; a factor with the time offset adds the td block last.
 struct LandmarkFactor {
   std::shared_ptr<ceres::CostFunction> cost;
   int frame;  ///< -1 for the one-frame stereo factor
 };
 
+TimedObservation timed(const Eigen::Vector2d& xy, const Eigen::Vector2d& velocity, double td_s) {
+  return {xy, velocity, td_s};
+}
+
+/// How a landmark's factors treat the time offset.
+struct TdUse {
+  bool block = false;  ///< each factor carries the td block
+  /// Without the block: observations moved to this offset (the current estimate) when
+  /// estimating, so the factors hold no information on td; nullopt: observations as they are.
+  std::optional<double> moved_to;
+};
+
+/// The projection factors of one landmark.
 std::vector<LandmarkFactor> landmarkFactors(const Landmark& lm, const Rig& rig, const ProjectionWeight& w_static,
-                                            const std::map<int, const double*>& scale_of_frame = {}) {
+                                            const TdUse& td, const std::map<int, const double*>& scale_of_frame = {}) {
   std::vector<LandmarkFactor> out;
   const Observation& a = lm.obs.front();
+  auto at = [&](const TimedObservation& o) -> Vector2d {
+    return td.moved_to ? Vector2d(o.xy - (*td.moved_to - o.td_obs) * o.velocity) : o.xy;
+  };
+  const TimedObservation a_left = timed(a.xy, a.velocity, a.td_s);
+  auto twoFrame = [&](const TimedObservation& target, const Extrinsic& cam, const ProjectionWeight& w)
+      -> std::shared_ptr<ceres::CostFunction> {
+    if (td.block) return std::make_shared<ProjectionTwoFrameTd>(a_left, target, rig.T_b_c0, cam, w);
+    return std::make_shared<ProjectionTwoFrame>(at(a_left), at(target), rig.T_b_c0, cam, w);
+  };
   for (std::size_t k = 0; k < lm.obs.size(); ++k) {
     const Observation& o = lm.obs[k];
     const int frame = lm.start_frame + static_cast<int>(k);
     ProjectionWeight w = w_static;  // stereo factors within one frame keep the static weight
     const auto it = scale_of_frame.find(frame);
     if (it != scale_of_frame.end()) w.info_scale = it->second;
-    if (k > 0) out.push_back({std::make_shared<ProjectionTwoFrame>(a.xy, o.xy, rig.T_b_c0, rig.T_b_c0, w), frame});
-    if (rig.stereo && o.has_right) {
-      if (k == 0)
-        out.push_back({std::make_shared<ProjectionOneFrameTwoCam>(a.xy, o.xy_right, rig.T_b_c0, rig.T_b_c1, w_static), -1});
-      else
-        out.push_back({std::make_shared<ProjectionTwoFrame>(a.xy, o.xy_right, rig.T_b_c0, rig.T_b_c1, w), frame});
+    if (k > 0) out.push_back({twoFrame(timed(o.xy, o.velocity, o.td_s), rig.T_b_c0, w), frame});
+    if (!rig.stereo || !o.has_right) continue;
+    const TimedObservation right = timed(o.xy_right, o.velocity_right, o.td_s);
+    if (k > 0) {
+      out.push_back({twoFrame(right, rig.T_b_c1, w), frame});
+    } else if (td.block) {
+      out.push_back({std::make_shared<ProjectionOneFrameTwoCamTd>(a_left, right, rig.T_b_c0, rig.T_b_c1, w_static), -1});
+    } else {
+      out.push_back(
+          {std::make_shared<ProjectionOneFrameTwoCam>(at(a_left), at(right), rig.T_b_c0, rig.T_b_c1, w_static), -1});
     }
   }
   return out;
@@ -85,6 +114,7 @@ Estimator::Estimator(const Config& config, const EstimatorOptions& options) : co
   rig_.fx = fisheye ? rig_.focal_px : config.cams[0].fx;
   rig_.fy = fisheye ? rig_.focal_px : config.cams[0].fy;
   noise_ = config.imu;
+  td_s_ = config.td_s;
 }
 
 void Estimator::addImu(const ImuSample& s) {
@@ -98,6 +128,7 @@ LatestState Estimator::latest() const {
   l.valid = true;
   l.t_ns = frames_[count_].t_ns;
   l.state = frames_[count_].nav();
+  l.td_s = td_s_;
   return l;
 }
 
@@ -107,6 +138,12 @@ void Estimator::resetWindow() {
   fm_.clear();
   prior_.reset();
   for (auto& f : frames_) f.pre.reset();
+}
+
+void Estimator::resetAfterFailure() {
+  resetWindow();
+  td_s_ = config_.td_s;  // a failure may come from a wrong offset: start again from the config's
+  td_restarted_ = false;
 }
 
 std::unique_ptr<imu::Preintegration> Estimator::integrate(TimeNs t0, TimeNs t1, const imu::NavState& from) const {
@@ -123,6 +160,7 @@ std::vector<Isometry3d> Estimator::windowPoses() const {
 FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
   FrameResult r;
   r.t_ns = ff.t_ns;
+  r.td_s = td_s_;
   if (count_ >= 0 && ff.t_ns <= frames_[count_].t_ns) {
     r.status = "skipped: time stamp not after the previous frame";
     return r;
@@ -139,7 +177,7 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     if (!f.pre) {
       r.status = "reset: no IMU data between frames";
       r.reset = initialized_;
-      resetWindow();
+      if (initialized_) resetAfterFailure(); else resetWindow();
       return r;
     }
     f.setNav(f.pre->predict(prev));
@@ -160,12 +198,13 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
   if (failureDetected(why)) {
     r.reset = true;
     r.status = "reset: " + why;
-    resetWindow();
+    resetAfterFailure();
     return r;
   }
   r.initialized = true;
   if (r.status.empty()) r.status = "tracking";
   r.state = frames_[count_].nav();
+  r.td_s = td_s_;
   last_T_w_b_ = frames_[count_].T_w_b();
   const auto slide_start = std::chrono::steady_clock::now();
   slide(r.keyframe);
@@ -197,12 +236,32 @@ bool Estimator::initStep(FrameResult& r) {
     r.status = "initializing: " + std::to_string(n + 1) + "/" + std::to_string(kWindowSize + 1) + " frames";
     return false;
   }
+  if (estimatesTd() && !td_restarted_ && alignTimeOffset(r)) return false;
   if (!alignAndStart()) {
     r.status = "initializing: gravity/velocity alignment failed, sliding";
     slide(true);
     return false;
   }
   r.status = "initialized";
+  return true;
+}
+
+bool Estimator::alignTimeOffset(FrameResult& r) {
+  std::vector<Quaterniond> q;
+  std::vector<TimeNs> t;
+  for (int i = 0; i <= count_; ++i) {
+    q.push_back(Quaterniond(frames_[i].T_w_b().linear()));
+    t.push_back(frames_[i].t_ns);
+  }
+  const std::optional<double> shift = alignRotationTimes(q, t, imu_, kTdInitSearchS);
+  if (!shift || std::abs(*shift) < kTdInitRestartS) return false;
+  // Moving the window's observations by the shift starts its solve far from where PnP put
+  // the poses (a shift of all poses along the motion is nearly free for the IMU factors and
+  // the solver crawls along it): start again with frames stamped with the new offset.
+  td_s_ += *shift;
+  td_restarted_ = true;
+  resetWindow();
+  r.status = "initializing: time offset " + std::to_string(1e3 * td_s_) + " ms from the rotations, restarting";
   return true;
 }
 
@@ -292,6 +351,9 @@ void Estimator::optimize(FrameResult& r) {
   // pointed to by the factors and refreshed by the iteration callback below.
   std::deque<CandidateWeight> weights;
   r.landmarks = addProjections(problem, costs, huber, weights, r.candidates);
+  // The offset is observable only in motion: held while the oldest frame is slow (as VINS-Fusion).
+  if (estimatesTd() && problem.HasParameterBlock(&td_s_) && frames_[0].nav().v_w.norm() < kMinSpeedForTd)
+    problem.SetParameterBlockConstant(&td_s_);
   refreshWeights(weights);
   struct Refresh : ceres::IterationCallback {
     std::function<void()> f;
@@ -354,6 +416,14 @@ void Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_
   }
 }
 
+std::vector<double*> Estimator::factorBlocks(Landmark& lm, int frame, bool with_td) {
+  std::vector<double*> blocks;
+  if (frame >= 0) blocks = {frames_[lm.start_frame].pose.data(), frames_[frame].pose.data()};
+  blocks.push_back(&lm.inv_depth);
+  if (with_td) blocks.push_back(&td_s_);
+  return blocks;
+}
+
 int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
                               ceres::LossFunction& huber, std::deque<CandidateWeight>& weights,
                               int& candidates) {
@@ -371,13 +441,9 @@ int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_p
         scale_of_frame[weights.back().frame] = &weights.back().info;
       }
     }
-    for (const auto& lf : landmarkFactors(lm, rig_, w, scale_of_frame)) {
+    for (const auto& lf : landmarkFactors(lm, rig_, w, TdUse{estimatesTd(), std::nullopt}, scale_of_frame)) {
       costs.push_back(lf.cost);
-      if (lf.frame < 0)
-        problem.AddResidualBlock(lf.cost.get(), &huber, &lm.inv_depth);
-      else
-        problem.AddResidualBlock(lf.cost.get(), &huber, frames_[lm.start_frame].pose.data(),
-                                 frames_[lf.frame].pose.data(), &lm.inv_depth);
+      problem.AddResidualBlock(lf.cost.get(), &huber, factorBlocks(lm, lf.frame, estimatesTd()));
     }
   }
   return used;
@@ -532,12 +598,11 @@ void Estimator::marginalizeOldest() {
     const ProjectionWeight w{rig_.focal_px, options_.sigma_px, nullptr};
     for (auto& [id, lm] : fm_.landmarks()) {
       if (lm.start_frame != 0 || !lm.usable()) continue;
-      for (const auto& lf : landmarkFactors(lm, rig_, w)) {
-        if (lf.frame < 0)
-          m.add({lf.cost, huber, {&lm.inv_depth}, {0}});
-        else
-          m.add({lf.cost, huber, {pose0, frames_[lf.frame].pose.data(), &lm.inv_depth}, {0, 2}});
-      }
+      // The prior keeps no information on the time offset: the marginalized observations are
+      // moved to the current estimate (measured: a prior that kept it held td near its first values).
+      const TdUse td = estimatesTd() ? TdUse{false, td_s_} : TdUse{};
+      for (const auto& lf : landmarkFactors(lm, rig_, w, td))
+        m.add({lf.cost, huber, factorBlocks(lm, lf.frame, false), lf.frame < 0 ? std::vector<int>{0} : std::vector<int>{0, 2}});
     }
     prior_ = std::make_shared<MarginalizationPrior>(m.marginalize());
     if (prior_->blocks.empty()) prior_.reset();

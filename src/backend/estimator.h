@@ -24,6 +24,12 @@ class Problem;
 namespace idyvins::backend {
 
 constexpr int kWindowSize = 10;
+/// Below this speed (m/s) of the oldest window frame the time offset is held, not estimated.
+constexpr double kMinSpeedForTd = 0.2;
+/// At initialization the offset is searched within ± this (s) of the config's (estimate_td).
+constexpr double kTdInitSearchS = 0.03;
+/// A rotation-aligned offset this far (s) from the current one restarts the initialization.
+constexpr double kTdInitRestartS = 0.001;
 
 /// Estimator tuning beyond the config.
 struct EstimatorOptions {
@@ -96,6 +102,7 @@ struct FrameResult {
   std::vector<std::uint64_t> outlier_ids;  ///< landmarks removed by the outlier test after this solve
   int outliers_confirmed = 0;  ///< of those, confirmed dynamic (EstimatorOptions::confirm_outliers)
   bool keyframe = false;
+  double td_s = 0;  ///< camera–IMU time offset after this frame (the config's td unless estimate_td)
 };
 
 /// The newest state, for the front end's motion prior (DESIGN §2: one small struct).
@@ -103,6 +110,7 @@ struct LatestState {
   bool valid = false;
   TimeNs t_ns = 0;
   imu::NavState state;
+  double td_s = 0;  ///< current camera–IMU time offset (image stamp + td = IMU clock)
 };
 
 /// One instance per sequence; feed IMU samples and frames in time order.
@@ -112,6 +120,8 @@ class Estimator {
   void addImu(const ImuSample& sample);
   FrameResult addFrame(const frontend::FeatureFrame& features);
   LatestState latest() const;
+  /// Current camera–IMU time offset (s): the config's td, or its estimate with estimate_td.
+  double timeOffset() const { return td_s_; }
   const Rig& rig() const { return rig_; }
   /// IMU samples kept since the oldest window frame (for the motion prior).
   const std::vector<ImuSample>& imuHistory() const { return imu_; }
@@ -132,10 +142,15 @@ class Estimator {
     void setNav(const imu::NavState& s);
   };
   void resetWindow();
+  /// After a failure: the window, and the offset back to the config's.
+  void resetAfterFailure();
   std::unique_ptr<imu::Preintegration> integrate(TimeNs t0, TimeNs t1, const imu::NavState& from) const;
   bool initStep(FrameResult& result);
   bool pnp(int frame);
   bool alignAndStart();
+  /// estimate_td: the offset from the initialization window's rotations (alignRotationTimes);
+  /// true when it moved by kTdInitRestartS or more and the window restarted.
+  bool alignTimeOffset(FrameResult& r);
   /// One candidate observation's information scale 1/m_j (DESIGN §4.5).
   struct CandidateWeight {
     Landmark* lm;
@@ -149,6 +164,10 @@ class Estimator {
   int addProjections(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
                      ceres::LossFunction& huber, std::deque<CandidateWeight>& weights, int& candidates);
   /// Recomputes every candidate weight from the current poses.
+  /// The blocks of a landmark's projection factor for `frame` (-1: its stereo factor in the
+  /// anchor frame), the td block last when `with_td`.
+  std::vector<double*> factorBlocks(Landmark& lm, int frame, bool with_td);
+  bool estimatesTd() const { return config_.estimate_td; }
   void refreshWeights(std::deque<CandidateWeight>& weights) const;
   /// Moves the window back so that its oldest frame keeps its yaw and position (backend/gauge.h).
   void restoreGauge(const Eigen::Isometry3d& T_w_b0_before);
@@ -181,6 +200,8 @@ class Estimator {
   /// Confirmed-dynamic landmark ids (DESIGN §4.6): they left the window for good, so
   /// later observations of the same front-end track are ignored.
   std::set<std::uint64_t> dynamic_ids_;
+  double td_s_ = 0;  ///< camera–IMU time offset (s), a solver block when estimate_td
+  bool td_restarted_ = false;  ///< the initialization restarted once for the offset (since the last failure)
 };
 
 }  // namespace idyvins::backend

@@ -43,6 +43,9 @@ bool FeatureManager::addFrame(int frame, const frontend::FeatureFrame& ff, doubl
     o.uv = f.uv;
     o.has_right = f.has_right;
     o.xy_right = f.xy_right;
+    o.velocity = f.velocity_xy;
+    o.velocity_right = f.velocity_xy_right;
+    o.td_s = ff.td_s;
     auto it = landmarks_.find(f.id);
     if (it == landmarks_.end() || it->second.endFrame() != frame - 1) {
       if (it != landmarks_.end()) landmarks_.erase(it);  // a gap: start over

@@ -1,6 +1,8 @@
 #include "backend/initializer.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
 
 #include "core/so3.h"
 
@@ -64,6 +66,50 @@ Alignment alignVelocityGravity(const std::vector<Eigen::Isometry3d>& T, const st
   for (int i = 0; i < n; ++i) out.v_w.push_back(v.segment<3>(3 * i));
   out.ok = v.allFinite();
   return out;
+}
+
+std::optional<double> alignRotationTimes(const std::vector<Eigen::Quaterniond>& q, const std::vector<TimeNs>& t,
+                                         const std::vector<ImuSample>& imu, double max_shift_s, double step_s) {
+  if (imu.empty() || q.size() != t.size() || step_s <= 0 || max_shift_s < 2 * step_s) return std::nullopt;
+  const TimeNs max_ns = static_cast<TimeNs>(std::llround(max_shift_s * 1e9));
+  std::vector<std::size_t> pairs;  // i: the pair (i − 1, i)
+  for (std::size_t i = 1; i < t.size(); ++i)
+    if (t[i - 1] - max_ns >= imu.front().t_ns && t[i] + max_ns <= imu.back().t_ns && t[i] > t[i - 1]) pairs.push_back(i);
+  if (pairs.size() < 3) return std::nullopt;
+  const ImuNoise noise;
+  const Vector3d zero = Vector3d::Zero();
+  // Squared rotation disagreement after the best gyroscope bias (first order) for a shift.
+  auto cost = [&](double shift_s) {
+    const TimeNs d = static_cast<TimeNs>(std::llround(shift_s * 1e9));
+    Matrix3d A = Matrix3d::Zero();
+    Vector3d b = Vector3d::Zero();
+    std::vector<std::pair<Matrix3d, Vector3d>> terms;
+    for (std::size_t i : pairs) {
+      const imu::Preintegration pre = imu::integrateBetween(imu, t[i - 1] + d, t[i] + d, zero, zero, noise);
+      const Matrix3d J = pre.jacobian().block<3, 3>(imu::kR, imu::kBg);
+      const Vector3d r = 2.0 * (pre.deltaQ().conjugate() * (q[i - 1].conjugate() * q[i])).vec();
+      A += J.transpose() * J;
+      b += J.transpose() * r;
+      terms.emplace_back(J, r);
+    }
+    const Vector3d bg = A.ldlt().solve(b);
+    double c = 0;
+    for (const auto& [J, r] : terms) c += (r - J * bg).squaredNorm();
+    return c;
+  };
+  const int n = static_cast<int>(std::floor(max_shift_s / step_s));
+  std::vector<double> c(2 * n + 1);
+  int best = 0;
+  for (int k = -n; k <= n; ++k) {
+    c[k + n] = cost(k * step_s);
+    if (c[k + n] < c[best]) best = k + n;
+  }
+  if (best == 0 || best == 2 * n) return std::nullopt;
+  // Vertex of the parabola through the best grid point and its neighbours.
+  const double cm = c[best - 1], c0 = c[best], cp = c[best + 1];
+  const double denom = cm - 2 * c0 + cp;
+  const double frac = denom > 0 ? 0.5 * (cm - cp) / denom : 0.0;
+  return ((best - n) + std::clamp(frac, -0.5, 0.5)) * step_s;
 }
 
 }  // namespace idyvins::backend

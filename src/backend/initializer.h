@@ -3,8 +3,10 @@
 // rotations, and velocity + gravity from visual poses and preintegrated IMU.
 
 #include <Eigen/Geometry>
+#include <optional>
 #include <vector>
 
+#include "core/measurements.h"
 #include "imu/preintegration.h"
 
 namespace idyvins::backend {
@@ -13,6 +15,16 @@ namespace idyvins::backend {
 /// consecutive poses: pre[i] integrates from frame i-1 to frame i (pre[0] unused).
 Eigen::Vector3d solveGyroBias(const std::vector<Eigen::Quaterniond>& q_w_b,
                               const std::vector<const imu::Preintegration*>& pre);
+
+/// Camera–IMU time offset from rotations alone, at initialization: the shift δ (s) of the
+/// IMU intervals [t_{i−1} + δ, t_i + δ] within ±max_shift_s that, each with its best
+/// gyroscope bias, makes the integrated gyroscope agree best with the relative rotations of
+/// the visual body orientations q_w_b at times t_ns (grid of step_s, refined by a parabola).
+/// Consecutive pairs whose shifted intervals the samples do not cover for every δ are left
+/// out. nullopt when fewer than 3 pairs remain or the best shift lies on the range's edge.
+std::optional<double> alignRotationTimes(const std::vector<Eigen::Quaterniond>& q_w_b, const std::vector<TimeNs>& t_ns,
+                                         const std::vector<ImuSample>& imu, double max_shift_s,
+                                         double step_s = 0.001);
 
 /// Result of the linear alignment.
 struct Alignment {

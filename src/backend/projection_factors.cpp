@@ -113,4 +113,66 @@ bool ProjectionOneFrameTwoCam::Evaluate(double const* const* parameters, double*
   return true;
 }
 
+namespace {
+
+/// The observation moved to the current time offset td, homogeneous.
+Vector3d atOffset(const TimedObservation& o, double td) {
+  return homogeneous(o.xy - (td - o.td_obs) * o.velocity);
+}
+
+Vector3d velocity3(const TimedObservation& o) { return Vector3d(o.velocity.x(), o.velocity.y(), 0.0); }
+
+}  // namespace
+
+ProjectionTwoFrameTd::ProjectionTwoFrameTd(const TimedObservation& obs_i, const TimedObservation& obs_j,
+                                           const Extrinsic& T_b_c0, const Extrinsic& T_b_cb,
+                                           const ProjectionWeight& weight)
+    : i_(obs_i), j_(obs_j), ex0_(T_b_c0), exb_(T_b_cb), weight_(weight) {}
+
+bool ProjectionTwoFrameTd::Evaluate(double const* const* parameters, double* residuals,
+                                    double** jacobians) const {
+  const double td = parameters[3][0];
+  const Vector3d pts_i = atOffset(i_, td), pts_j = atOffset(j_, td);
+  // The residual and the pose and depth Jacobians are those of the fixed-offset factor at
+  // the moved observations.
+  const ProjectionTwoFrame fixed(pts_i.head<2>(), pts_j.head<2>(), ex0_, exb_, weight_);
+  if (!fixed.Evaluate(parameters, residuals, jacobians)) return false;
+  if (!jacobians || !jacobians[3]) return true;
+  const Eigen::Map<const Vector3d> Pi(parameters[0]);
+  const Quaterniond Qi = Eigen::Map<const Quaterniond>(parameters[0] + 3).normalized();
+  const Eigen::Map<const Vector3d> Pj(parameters[1]);
+  const Quaterniond Qj = Eigen::Map<const Quaterniond>(parameters[1] + 3).normalized();
+  const double inv_dep = parameters[2][0];
+  const double sqrt_info = weight_.sqrtInfo();
+  const Vector3d pts_cam_j = transferPoint(pts_i, inv_dep, Pi, Qi, Pj, Qj, ex0_, exb_);
+  const Matrix3d R_cj_ci = exb_.q_b_c.conjugate().toRotationMatrix() * Qj.conjugate().toRotationMatrix() *
+                           Qi.toRotationMatrix() * ex0_.q_b_c.toRotationMatrix();
+  // d pts_i / d td = −v_i (the anchor ray scaled by 1/ρ); d pts_j / d td = −v_j.
+  Eigen::Map<Vector2d> J(jacobians[3]);
+  J = reduceJacobian(pts_cam_j, sqrt_info) * R_cj_ci * (-velocity3(i_) / inv_dep) + sqrt_info * j_.velocity;
+  return true;
+}
+
+ProjectionOneFrameTwoCamTd::ProjectionOneFrameTwoCamTd(const TimedObservation& left, const TimedObservation& right,
+                                                       const Extrinsic& T_b_c0, const Extrinsic& T_b_c1,
+                                                       const ProjectionWeight& weight)
+    : left_(left), right_(right), ex0_(T_b_c0), ex1_(T_b_c1), weight_(weight) {}
+
+bool ProjectionOneFrameTwoCamTd::Evaluate(double const* const* parameters, double* residuals,
+                                          double** jacobians) const {
+  const double td = parameters[1][0];
+  const Vector3d pts_i = atOffset(left_, td), pts_j = atOffset(right_, td);
+  const ProjectionOneFrameTwoCam fixed(pts_i.head<2>(), pts_j.head<2>(), ex0_, ex1_, weight_);
+  if (!fixed.Evaluate(parameters, residuals, jacobians)) return false;
+  if (!jacobians || !jacobians[1]) return true;
+  const double inv_dep = parameters[0][0];
+  const double sqrt_info = weight_.sqrtInfo();
+  const Vector3d pts_imu = ex0_.q_b_c * (pts_i / inv_dep) + ex0_.t_b_c;
+  const Vector3d pts_cam_j = ex1_.q_b_c.conjugate() * (pts_imu - ex1_.t_b_c);
+  const Matrix3d R_c1_c0 = ex1_.q_b_c.conjugate().toRotationMatrix() * ex0_.q_b_c.toRotationMatrix();
+  Eigen::Map<Vector2d> J(jacobians[1]);
+  J = reduceJacobian(pts_cam_j, sqrt_info) * R_c1_c0 * (-velocity3(left_) / inv_dep) + sqrt_info * right_.velocity;
+  return true;
+}
+
 }  // namespace idyvins::backend

@@ -58,6 +58,45 @@ class ProjectionOneFrameTwoCam final : public ceres::SizedCostFunction<2, 1> {
   ProjectionWeight weight_;
 };
 
+/// What a time-offset factor needs of one observation: its velocity on the normalized
+/// plane (1/s) and the offset td_obs (s) its frame was stamped with. With the current
+/// offset td the observation is moved to xy − (td − td_obs)·velocity (VINS-Fusion's model:
+/// the feature moves at constant image velocity over the small offset change).
+struct TimedObservation {
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+  Eigen::Vector2d velocity = Eigen::Vector2d::Zero();
+  double td_obs = 0;
+};
+
+/// ProjectionTwoFrame with the camera–IMU time offset as a fifth block. Blocks: pose_i (7),
+/// pose_j (7), inv_depth (1), td (1, seconds).
+class ProjectionTwoFrameTd final : public ceres::SizedCostFunction<2, 7, 7, 1, 1> {
+ public:
+  ProjectionTwoFrameTd(const TimedObservation& obs_i, const TimedObservation& obs_j, const Extrinsic& T_b_c0,
+                       const Extrinsic& T_b_cb, const ProjectionWeight& weight);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  TimedObservation i_, j_;
+  Extrinsic ex0_, exb_;
+  ProjectionWeight weight_;
+};
+
+/// ProjectionOneFrameTwoCam with the time offset. Blocks: inv_depth (1), td (1, seconds).
+class ProjectionOneFrameTwoCamTd final : public ceres::SizedCostFunction<2, 1, 1> {
+ public:
+  ProjectionOneFrameTwoCamTd(const TimedObservation& left, const TimedObservation& right, const Extrinsic& T_b_c0,
+                             const Extrinsic& T_b_c1, const ProjectionWeight& weight);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  TimedObservation left_, right_;
+  Extrinsic ex0_, ex1_;
+  ProjectionWeight weight_;
+};
+
 /// Normalized-plane reprojection of the anchor observation (xy_i, inverse depth)
 /// from pose_i/camera a into pose_j/camera b; the pure math shared by the factors
 /// and by outlier checks. Returns the 3D point in camera b.

@@ -36,8 +36,6 @@ class FeatureFilter {
  public:
   virtual ~FeatureFilter() = default;
   virtual void apply(const FilterContext& context, std::vector<FilterItem>& items) = 0;
-  /// Per-frame statistics the filter wants to report (JSON-able key/values).
-  virtual std::vector<std::pair<std::string, double>> frameStats() const { return {}; }
 };
 
 /// `ransac`: fundamental-matrix RANSAC between consecutive left frames on

@@ -22,6 +22,11 @@ struct Feature {
   Eigen::Vector2d uv_right = Eigen::Vector2d::Zero();
   Eigen::Vector2d xy_right = Eigen::Vector2d::Zero();
   Eigen::Vector2d velocity_px = Eigen::Vector2d::Zero();  ///< left pixel velocity, px/s
+  /// Velocity on the normalized image plane (1/s), left and right, from the previous frame's
+  /// observation of the same track (zero for a new track or without a right match in both
+  /// frames); the estimator moves observations along it when it estimates the time offset.
+  Eigen::Vector2d velocity_xy = Eigen::Vector2d::Zero();
+  Eigen::Vector2d velocity_xy_right = Eigen::Vector2d::Zero();
   int track_length = 1;  ///< frames this id has been tracked (1 = new)
   FeatureLabel label = FeatureLabel::kStatic;
   double score = 0;      ///< filter's per-feature score (IDY: d_s, px²), 0 if none
@@ -31,7 +36,8 @@ struct Feature {
 
 /// The front end's output for one frame.
 struct FeatureFrame {
-  TimeNs t_ns = 0;
+  TimeNs t_ns = 0;  ///< on the IMU clock: the image stamp + td_s
+  double td_s = 0;  ///< camera–IMU time offset the stamp was shifted by (config td, or its estimate)
   std::vector<Feature> features;
   /// Features labelled kEliminated in this frame: removed by the filter now, or (with
   /// TrackerParams::keep_following_eliminated) removed earlier and still followed.

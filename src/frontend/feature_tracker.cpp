@@ -326,7 +326,7 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
 }
 
 void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vector<Feature>& features,
-                                const std::vector<std::size_t>* which, const std::vector<PrevObs>* prev_obs) {
+                                const std::vector<std::size_t>* which) {
   if (!has_right_image_) return;
   std::vector<std::size_t> all;
   if (!which) {
@@ -345,37 +345,8 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
   std::vector<float> err;
   for (std::size_t i = 0; i < n; ++i)
     pl[i] = cv::Point2f(static_cast<float>(features[(*which)[i]].uv.x()), static_cast<float>(features[(*which)[i]].uv.y()));
-  // A track matched in the previous frame: from its previous disparity, on few levels.
-  std::vector<std::size_t> guided, full;
-  for (std::size_t i = 0; i < n; ++i) {
-    const PrevObs* p = prev_obs ? &(*prev_obs)[(*which)[i]] : nullptr;
-    if (p && p->has_right && params_.klt_stereo_guided_levels > 0) {
-      const Eigen::Vector2d guess = features[(*which)[i]].uv + (p->uv_right - p->uv);
-      pr[i] = cv::Point2f(static_cast<float>(guess.x()), static_cast<float>(guess.y()));
-      guided.push_back(i);
-    } else {
-      full.push_back(i);
-    }
-  }
-  auto lk = [&](const std::vector<std::size_t>& idx, int levels, int flags) {
-    if (idx.empty()) return;
-    std::vector<cv::Point2f> a, b;
-    for (std::size_t i : idx) {
-      a.push_back(pl[i]);
-      b.push_back(flags ? pr[i] : pl[i]);
-    }
-    std::vector<uchar> st;
-    cv::calcOpticalFlowPyrLK(left_pyr, right_pyr, a, b, st, err, win, levels, crit, flags);
-    for (std::size_t j = 0; j < idx.size(); ++j) {
-      pr[idx[j]] = b[j];
-      status[idx[j]] = st[j] && inBorder(b[j]);
-    }
-  };
-  lk(guided, params_.klt_stereo_guided_levels, cv::OPTFLOW_USE_INITIAL_FLOW);
-  for (std::size_t i : guided)
-    if (!status[i]) full.push_back(i);  // lost from the guess: search from scratch
-  std::sort(full.begin(), full.end());
-  lk(full, params_.klt_levels, 0);
+  cv::calcOpticalFlowPyrLK(left_pyr, right_pyr, pl, pr, status, err, win, params_.klt_levels, crit, 0);
+  for (std::size_t i = 0; i < n; ++i) status[i] = status[i] && inBorder(pr[i]);
   if (config_.tracker.flow_back) {
     back = pl;
     cv::calcOpticalFlowPyrLK(right_pyr, left_pyr, pr, back, status_back, err, win, params_.klt_back_levels, crit,
@@ -504,7 +475,7 @@ void FeatureTracker::filterTracks(FrameWork& w, std::vector<Track>& list, const 
                                   std::vector<Feature>& feats) {
   feats.clear();
   for (const auto& t : list) feats.push_back(featureOf(t));
-  if (prev_obs) matchRight(cur_pyr_, feats, nullptr, prev_obs);  // tracked: right match now; new corners: after the top-up
+  if (prev_obs) matchRight(cur_pyr_, feats);  // tracked: right match now; new corners: after the top-up
   if (!w.filter) return;
   const auto t0 = Clock::now();
   std::vector<FilterItem> items(feats.size());
@@ -573,12 +544,16 @@ std::vector<FeatureTracker::Track> FeatureTracker::assembleFeatures(
 }
 
 void FeatureTracker::setVelocities(FeatureFrame& out, double dt) const {
-  if (dt <= 0) return;  // pixel velocity from the previous observation
-  std::unordered_map<std::uint64_t, cv::Point2f> prev_pos;
-  for (const auto& t : prev_tracks_) prev_pos[t.id] = t.uv;
+  if (dt <= 0) return;  // velocities from the previous observation
+  std::unordered_map<std::uint64_t, const Track*> prev;
+  for (const auto& t : prev_tracks_) prev[t.id] = &t;
   for (auto& f : out.features) {
-    auto it = prev_pos.find(f.id);
-    if (it != prev_pos.end()) f.velocity_px = (f.uv - toEigen(it->second)) / dt;
+    auto it = prev.find(f.id);
+    if (it == prev.end()) continue;
+    const Track& p = *it->second;
+    f.velocity_px = (f.uv - toEigen(p.uv)) / dt;
+    f.velocity_xy = (f.xy - p.xy) / dt;
+    if (f.has_right && p.has_right) f.velocity_xy_right = (f.xy_right - p.xy_right) / dt;
   }
 }
 

@@ -23,23 +23,18 @@ namespace idyvins::frontend {
 /// Tracker options beyond the config's tracker block.
 struct TrackerParams {
   int klt_window = 13;  ///< px; smaller than VINS-Fusion's 21: less drift under perspective change (measured)
-  int klt_levels = 4;  ///< 13 px window: capture range about VINS-Fusion's 21 px x 3 levels (2d6b296)
+  /// Pyramid levels above the full image (OpenCV's maxLevel: 4 gives five images); with the
+  /// 13 px window the capture range is about VINS-Fusion's 21 px window on 3 levels.
+  int klt_levels = 4;
   /// Pyramid levels of the backward checks: they start at the forward start point, so a
   /// narrow basin suffices (VINS-Fusion uses 1 for its reverse check).
   int klt_back_levels = 1;
-  /// Pyramid levels of the right-image search started from a track's previous disparity
-  /// (the disparity of a static point changes by a fraction of a pixel between frames);
-  /// 0: every search starts at the left position on klt_levels. Off by default: with 2
-  /// levels the standard benchmark at 7bb6014 lost recall in city low (86.2 -> 80.8 %)
-  /// and idy's margin over the baseline at city none and mid (docs/results-history.md).
-  int klt_stereo_guided_levels = 0;
   int klt_iterations = 30;     ///< KLT stops after this many iterations ...
   double klt_epsilon = 0.01;   ///< ... or when the update is below this (px)
   double flow_back_px = 0.5;       ///< max forward-backward distance
   /// A right match whose patch correlates worse than this with the left one (ZNCC of the
-  /// patch_half patches) is dropped. Measured on city high: it drops 4 % of the static
-  /// corners' matches, 2.8x as often wrong (> 1 px or hidden) and 1.9x as often beside a
-  /// vehicle as the rest. -1 switches the check off.
+  /// patch_half patches) is dropped: such matches are more often wrong (> 1 px or hidden)
+  /// or beside a vehicle than the rest (docs/method.md). -1 switches the check off.
   double stereo_min_zncc = 0.8;
   int border_px = 1;
   /// Keep following features the filter eliminated (IDY modes): they are reported in
@@ -87,9 +82,7 @@ struct TrackerParams {
   /// track, and whose displacement since its first frame agrees with that track's within
   /// this many px, is judged moving with it (reported in FeatureFrame::lost_moving, like a
   /// lost corner judged moving). Such corners appear where a receding vehicle shrinks in
-  /// the image. Measured on parking_lot mid seed 1 at realism euroc: 1 / 3 / 6 px took the
-  /// moving observations flagged from 85.5 % to 85.6 / 86.3 / 86.9 %, static 0.53 % to
-  /// 0.53 / 0.54 / 0.55 %. 0 switches it off.
+  /// the image (measured values in docs/method.md). 0 switches it off.
   double move_with_eliminated_px = 6.0;
 };
 
@@ -109,7 +102,6 @@ class FeatureTracker {
   FeatureFrame track(const StereoFrame& frame, const MotionPrior& prior, FeatureFilter* filter,
                      const cv::Mat* mask = nullptr);
 
-  const camera::CameraModel& leftCamera() const { return *cams_[0]; }
   /// Drops every track (after a reset of the estimator, for example).
   void reset();
 
@@ -191,12 +183,10 @@ class FeatureTracker {
   /// with it is appended to `with_eliminated` (its previous-frame track, in prev_tracks_).
   void detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected,
                  std::vector<const Track*>& with_eliminated);
-  /// Matches features[i] for i in `which` (all when null) in the right image. With
-  /// `prev_obs` (parallel to `features`), a feature matched in the previous frame starts
-  /// from its previous disparity on klt_stereo_guided_levels levels; where that fails,
-  /// and for the others, the search starts at the left position on all levels.
+  /// Matches features[i] for i in `which` (all when null) in the right image: KLT from the
+  /// left position on klt_levels levels, backward check, epipolar and ZNCC checks.
   void matchRight(const std::vector<cv::Mat>& left_pyr, std::vector<Feature>& features,
-                  const std::vector<std::size_t>* which = nullptr, const std::vector<PrevObs>* prev_obs = nullptr);
+                  const std::vector<std::size_t>* which = nullptr);
   bool inBorder(const cv::Point2f& p) const;
   AlignOptions alignOptions() const;  ///< first-patch alignment with params_.patch_min_inside
 

@@ -28,13 +28,13 @@ struct TrackerOptions {
   double f_threshold = 1.0;   ///< px, F-matrix RANSAC threshold (mode ransac)
   bool flow_back = true;      ///< forward-backward KLT check
   /// `equalize` (VINS-Mono's key, default 0): CLAHE (clip limit 3, 8 x 8 tiles) on both
-  /// images before tracking, detection and stereo matching. On the real EuRoC excerpt it
-  /// raises the share of features with a right match from 40 to 52 % (with gain compensation).
+  /// images before tracking, detection and stereo matching (on the real EuRoC excerpt it
+  /// gives more features a right match, docs/method.md).
   bool equalize = false;
   /// `stereo_gain_compensation` (default 1): before the left -> right search, the right
   /// image's brightness is mapped to the left's (gain and offset from the two images' mean
   /// and standard deviation) when they differ by more than 1 %. KLT assumes equal
-  /// brightness; EuRoC's right camera is about 10 % darker (18 -> 40 % right matches).
+  /// brightness; EuRoC's right camera is darker than its left (docs/method.md).
   bool stereo_gain_compensation = true;
   /// `stereo_epipolar_px` (default 2): a right match farther than this from its epipolar
   /// line (known extrinsics) is dropped.
@@ -78,11 +78,8 @@ struct StereoMotionOptions {
   double drift_mps = 0.02;     ///< `stereo_motion_drift_mps`: drift of the chained priors
   /// `stereo_motion_remove_chi2`: with a value above `chi2`, a repeated failure removes the
   /// feature only when its χ² exceeds this or the failures reach `persistent_strikes`;
-  /// otherwise it stays a candidate. 0 = every repeated failure removes (the default).
-  /// Measured at 80 (persistent 3) and left off: static false alarms are young tracks
-  /// with χ² 20–60 where moving ones reach 100–1000; on the realism benchmark city none
-  /// went 1.08x -> 1.00x the baseline, but moving flagged at city low fell 84.4 -> 83.8 %
-  /// (realism) and 86.4 -> 83.5 % (clean): slow traffic is removed later (docs/method.md).
+  /// otherwise it stays a candidate. 0 = every repeated failure removes (the default; on
+  /// clean images slow traffic would be removed too late, docs/method.md).
   double remove_chi2 = 0;
   /// `stereo_motion_persistent_strikes`: with `remove_chi2` on, this many consecutive
   /// failures remove the feature whatever its χ² (slow motion along the line of sight);
@@ -90,7 +87,7 @@ struct StereoMotionOptions {
   int persistent_strikes = 3;
   /// `stereo_motion_left_chi2`: a failure whose left-image residual alone is within this
   /// (χ², 2 dof; 5.99 = 95 %) is not counted (the right match is suspect: hidden, or at a
-  /// silhouette). 0 = off. 5.99 measured at 9ffe0a1 (13.82 cost recall), see docs/method.md.
+  /// silhouette). 0 = off. Looser gates cost recall (docs/method.md).
   double left_chi2 = 5.99;
   /// `stereo_motion_noise_ref`: the tracker's noise is measured on every frame as a
   /// quantile of the χ² of the tested features (most are static); when that quantile

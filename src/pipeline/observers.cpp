@@ -148,6 +148,7 @@ nlohmann::json StatsRecorder::frameJson(const FrameOutput& out) {
                      {"landmarks", r.landmarks},
                      {"keyframe", r.keyframe},
                      {"initialized", r.initialized},
+                     {"td_s", r.td_s},
                      {"status", r.status}};
 }
 

@@ -3,6 +3,7 @@
 #include <condition_variable>
 #include <functional>
 #include <mutex>
+#include <cmath>
 #include <stdexcept>
 #include <thread>
 #include <utility>
@@ -102,6 +103,7 @@ System::System(const Config& config, const RunOptions& run)
   if (run_.pipelined && run_.feedback_delay != 1)
     throw std::invalid_argument("a pipelined run needs RunOptions::feedback_delay 1");
   if (run_.pipelined) worker_ = std::make_unique<Worker>();
+  td_s_ = config_.td_s;
 }
 
 System::~System() = default;
@@ -127,18 +129,42 @@ frontend::MotionPrior System::priorFor(TimeNs t_prev, TimeNs t_cur) const {
 }
 
 const FrameOutput* System::addFrame(const StereoFrame& frame) {
+  done_.reset();
+  pending_.push_back(frame);  // images are reference-counted: no copy
+  while (!pending_.empty() && (imuCovers(pending_.front()) || pending_.size() > kMaxPendingFrames)) {
+    process(pending_.front());
+    pending_.pop_front();
+  }
+  return done_ ? &done_->out : nullptr;
+}
+
+TimeNs System::imuTime(const StereoFrame& frame) const {
+  return frame.t_ns + static_cast<TimeNs>(std::llround(td_s_ * 1e9));
+}
+
+bool System::imuCovers(const StereoFrame& frame) const {
+  const TimeNs t = imuTime(frame);
+  // Samples come in stamp order with the frames: up to the image stamp they are all here.
+  return t <= frame.t_ns || (!imu_.empty() && imu_.back().t_ns >= t);
+}
+
+void System::process(const StereoFrame& frame) {
   auto f = std::make_unique<InFlight>();
-  f->input = frame;  // images are reference-counted: no copy
+  f->input = frame;
+  StereoFrame on_imu_clock = frame;
+  on_imu_clock.t_ns = imuTime(frame);
+  const TimeNs t = on_imu_clock.t_ns;
   FrameOutput& out = f->out;
   out.index = summary_.frames + (in_flight_ ? 1 : 0);
-  out.t_ns = frame.t_ns;
-  out.features = front_end_.track(frame, priorFor(last_frame_t_ns_, frame.t_ns));
+  out.t_ns = t;
+  out.features = front_end_.track(on_imu_clock, priorFor(last_frame_t_ns_, t));
+  out.features.td_s = td_s_;
   out.idy = front_end_.idyStats();
-  last_frame_t_ns_ = frame.t_ns;
-  // The estimator gets the IMU samples up to this frame with the frame's back end.
-  while (imu_to_estimator_ < imu_.size() && imu_[imu_to_estimator_].t_ns <= frame.t_ns)
+  last_frame_t_ns_ = t;
+  // The estimator gets the IMU samples up to this frame's time, and the first one at or after
+  // it (a frame between two samples is reached by interpolation), with the frame's back end.
+  while (imu_to_estimator_ < imu_.size() && (imu_to_estimator_ == 0 || imu_[imu_to_estimator_ - 1].t_ns < t))
     f->imu.push_back(imu_[imu_to_estimator_++]);
-  done_.reset();
   completeInFlight();  // feedback_delay 1: the previous frame's back end
   mapLostMoving(out.features, out);
   in_flight_ = std::move(f);
@@ -147,7 +173,6 @@ const FrameOutput* System::addFrame(const StereoFrame& frame) {
   } else if (run_.feedback_delay == 0) {
     completeInFlight();
   }
-  return done_ ? &done_->out : nullptr;
 }
 
 void System::backEnd(InFlight& f) {
@@ -169,6 +194,7 @@ void System::completeInFlight() {
 void System::finalize(InFlight& f) {
   if (f.out.estimate.reset) front_end_.reset();
   snapshot_ = estimator_.latest();
+  td_s_ = estimator_.timeOffset();
   // The next priors start at the newest state (or, before there is one, at a frame not
   // older than this one): drop the samples before the last one at or before that time.
   const TimeNs from = snapshot_.valid ? std::min(snapshot_.t_ns, f.out.t_ns) : f.out.t_ns;
@@ -233,7 +259,16 @@ void System::account(FrameOutput& out) {
 }
 
 Result System::finish() {
+  // Frames whose time on the IMU clock is past the last IMU sample cannot be integrated to.
+  for (; !pending_.empty(); pending_.pop_front()) {
+    if (imuCovers(pending_.front()))
+      process(pending_.front());
+    else
+      ++summary_.frames_beyond_imu;
+  }
   completeInFlight();
+  summary_.td_s = td_s_;
+  summary_.td_estimated = config_.estimate_td;
   estimator_.flushMap();
   Result result;
   result.static_map = estimator_.staticMap();

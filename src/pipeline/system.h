@@ -12,6 +12,7 @@
 //
 // Observers (evaluation against masks, stats, progress) subscribe with addObserver().
 
+#include <deque>
 #include <memory>
 #include <optional>
 #include <string>
@@ -62,6 +63,10 @@ struct ResetEvent {
 /// Counters over a whole run.
 struct Summary {
   std::size_t frames = 0;
+  /// Frames left unprocessed at finish(): their time on the IMU clock (stamp + td) is after the last IMU sample.
+  std::size_t frames_beyond_imu = 0;
+  double td_s = 0;            ///< camera–IMU time offset at the end (the config's td unless estimated)
+  bool td_estimated = false;  ///< the config's estimate_td
   TimeNs first_t_ns = 0, last_t_ns = 0;  ///< time stamps of the first and last frame
   TimeNs init_t_ns = -1;                 ///< first initialized frame (-1: never)
   std::size_t frames_without_prior = 0;  ///< idy modes: frames the IDY filter saw without a motion prior
@@ -104,6 +109,8 @@ struct RunOptions {
 /// motion prior from the estimator's newest state), estimator, maps. One per sequence.
 class System {
  public:
+  /// Frames that may wait for IMU samples before they are processed without them.
+  static constexpr std::size_t kMaxPendingFrames = 20;
   /// Mode from config.dynamic.mode. Throws InputError unless the config is stereo + IMU,
   /// std::invalid_argument for inconsistent run options.
   explicit System(const Config& config, const RunOptions& run = {});
@@ -115,12 +122,17 @@ class System {
   /// thread, once the frame's back end has finished; not owned.
   void addObserver(FrameObserver& observer) { observers_.push_back(&observer); }
   void addImu(const ImuSample& sample);
-  /// Processes one stereo frame (after the IMU samples up to its time stamp). Returns the
+  /// Processes one stereo frame (after the IMU samples up to its time stamp). The frame's
+  /// time on the IMU clock is its stamp + td (the config's, or the current estimate with
+  /// estimate_td); when that is later than the newest IMU sample the frame waits for the next
+  /// call (at most kMaxPendingFrames frames wait; finish() processes the rest). Returns the
   /// output of the newest frame whose back end finished during this call: this frame with
-  /// feedback_delay 0, the previous one with 1 (null for the first frame). The pointer is
-  /// valid until the next call.
+  /// feedback_delay 0, the previous one with 1 (null when none finished). Observers see every
+  /// frame. The pointer is valid until the next call.
   const FrameOutput* addFrame(const StereoFrame& frame);
-  /// Completes the frame still in flight (its observers are called), moves the window's
+  /// Processes the frames still waiting for IMU samples that the samples reach (the others
+  /// are counted in Summary::frames_beyond_imu), completes the frame still in flight (its
+  /// observers are called), moves the window's
   /// static landmarks into the static map and returns the maps, the trajectory and the
   /// counters. Call once, at the end.
   Result finish();
@@ -140,6 +152,9 @@ class System {
     FrameOutput out;
     std::vector<ImuSample> imu;  ///< samples up to the frame's time, not yet given to the estimator
   };
+  TimeNs imuTime(const StereoFrame& frame) const;   ///< the frame's stamp + the current offset
+  bool imuCovers(const StereoFrame& frame) const;  ///< the IMU samples up to imuTime(frame) are here
+  void process(const StereoFrame& frame);          ///< front end now, back end now or with the next frame
   frontend::MotionPrior priorFor(TimeNs t_prev, TimeNs t_cur) const;
   void backEnd(InFlight& f);  ///< estimator and dynamic map of one frame (the worker's job)
   void completeInFlight();     ///< waits for (or runs) the back end in flight, then finalizes it
@@ -160,7 +175,9 @@ class System {
   std::vector<ImuSample> imu_;           ///< samples not yet handed to the estimator, and those the prior needs
   std::size_t imu_to_estimator_ = 0;     ///< imu_[i] for i < this went to the estimator already
   backend::LatestState snapshot_;        ///< the estimator's newest state after the last finalized frame
-  TimeNs last_frame_t_ns_ = -1;          ///< time of the previous frame given to the front end
+  TimeNs last_frame_t_ns_ = -1;          ///< time (IMU clock) of the previous frame given to the front end
+  std::deque<StereoFrame> pending_;      ///< frames waiting for the IMU samples up to their time
+  double td_s_ = 0;                      ///< camera–IMU offset (s): image stamp + td = IMU clock
   Summary summary_;
   std::vector<StampedState> trajectory_;
   std::vector<backend::MapPoint> eliminated_;

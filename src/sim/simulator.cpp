@@ -113,10 +113,9 @@ Config rigConfig(const SimOptions& options) {
   // disparity is biased by brightness differences a global gain leaves, see TrackerOptions).
   c.tracker.stereo_refine = options.realism.enabled;
   // A real camera's noise, blur and exposure changes make young static tracks fail the
-  // stereo motion test with chi2 20-60 where moving ones score 100-1000: on such images a
-  // repeated failure removes only above chi2 80 or after 3 failures in a row (measured on
-  // the realism benchmark, docs/real-images.md; clean images keep removing at the first
-  // repeated failure, which their recall needs).
+  // stereo motion test: on such images a repeated failure removes only above chi2 80 or
+  // after 3 failures in a row (docs/real-images.md; clean images keep removing at the
+  // first repeated failure, which their recall needs).
   if (options.realism.enabled) c.dynamic.stereo.remove_chi2 = 80.0;
   c.solver = SolverOptions{0.04, 8, 10.0};
   return c;
@@ -239,6 +238,7 @@ nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult
           {"opening_vehicle", o.scene.opening_vehicle},
           {"duration_s", o.duration_s},
           {"t0_ns", o.t0_ns},
+          {"td_s", o.td_s},
           {"frames", r.frames},
           {"imu_samples", r.imu_samples},
           {"camera_rate_hz", o.camera_rate_hz},
@@ -423,7 +423,8 @@ SimResult simulate(const SimOptions& o, const std::string& out_dir,
   const TimeNs frame_dt = static_cast<TimeNs>(std::llround(1e9 / o.camera_rate_hz));
   result.frames = frames;
   std::vector<TimeNs> stamps(frames);
-  for (std::size_t k = 0; k < frames; ++k) stamps[k] = o.t0_ns + static_cast<TimeNs>(k) * frame_dt;
+  const TimeNs td_ns = static_cast<TimeNs>(std::llround(o.td_s * 1e9));
+  for (std::size_t k = 0; k < frames; ++k) stamps[k] = o.t0_ns + static_cast<TimeNs>(k) * frame_dt - td_ns;
   std::vector<double> coverage(frames, 0.0);
 
   std::atomic<std::size_t> next{0}, done{0};

@@ -49,6 +49,9 @@ struct SimOptions {
   /// by default: images as before, with image_noise_sigma Gaussian noise.
   RealismOptions realism;
   int threads = 2;
+  /// Camera–IMU time offset of the written data (s): each image is stamped with its capture
+  /// time on the IMU clock minus td_s (VINS-Fusion: image clock + td = IMU clock).
+  double td_s = 0.0;
   TimeNs t0_ns = 1'700'000'000'000'000'000;
   double g_norm = 9.81;
 };
