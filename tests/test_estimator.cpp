@@ -192,10 +192,10 @@ TEST(Estimator, PostProcessingConfirmsMovingCandidatesAndClearsStaticOnes) {
   const RunResult r = runSequence(
       options("city", 6.0), hook, opt,
       [&](const Estimator& e) {
-        for (const auto& p : e.dynamicMap()) confirmed.insert(p.id);
         for (const auto& p : e.staticMap()) in_static.insert(p.id);
       },
       [&](const FrameResult& fr) {
+        for (const auto& p : fr.confirmed_points) confirmed.insert(p.id);
         confirmations += fr.confirmed_dynamic;
         cleared += fr.cleared;
       });
@@ -259,10 +259,10 @@ TEST(Estimator, OutliersConfirmedDynamicOnlyWhenEnabled) {
     const RunResult r = runSequence(
         options("city", 4.0), hook, opt,
         [&](const Estimator& e) {
-          for (const auto& p : e.dynamicMap()) confirmed.insert(p.id);
-          for (const auto& p : e.staticMap()) in_static.insert(p.id);
+            for (const auto& p : e.staticMap()) in_static.insert(p.id);
         },
         [&](const FrameResult& fr) {
+          for (const auto& p : fr.confirmed_points) confirmed.insert(p.id);
           for (auto id : fr.outlier_ids) ++removals[id];
           outliers_confirmed += fr.outliers_confirmed;
         });

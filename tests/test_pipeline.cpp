@@ -97,7 +97,7 @@ TEST(PipelineSystem, IdyThroughTheLibraryApiTracksTheTruthAndLabelsTheMovingTraf
   EXPECT_LT(idy.classification.static_map_fraction_on_moving, 0.02);
   EXPECT_GT(idy.result.static_map.size(), 200u);
   std::size_t eliminated = 0;
-  for (const auto& p : idy.result.dynamic_map) eliminated += p.label == 1;
+  for (const auto& p : idy.result.dynamic_map) eliminated += p.label == frontend::FeatureLabel::kEliminated;
   EXPECT_GT(eliminated, 100u) << "eliminated features triangulated into the dynamic map";
   std::printf("idy: ATE %.4f m, moving flagged %.1f %%, static flagged %.2f %%, static map on moving %.2f %%\n", error,
               100 * idy.classification.recall, 100 * idy.classification.static_flagged,
@@ -109,7 +109,7 @@ TEST(PipelineSystem, BaselineThroughTheLibraryApiFlagsNothing) {
   EXPECT_EQ(base.classification.true_positives + base.classification.false_positives, 0u);
   EXPECT_TRUE(base.result.dynamic_map.empty() ||
               std::all_of(base.result.dynamic_map.begin(), base.result.dynamic_map.end(),
-                          [](const backend::MapPoint& p) { return p.label == 2; }));
+                          [](const backend::MapPoint& p) { return p.label == frontend::FeatureLabel::kConfirmedDynamic; }));
   EXPECT_GT(base.result.trajectory.size(), 40u);
 }
 

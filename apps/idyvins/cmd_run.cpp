@@ -64,7 +64,7 @@ std::vector<io::LabelledPoint> plyPoints(const std::vector<backend::MapPoint>& a
                                          const std::vector<backend::MapPoint>& b = {}) {
   std::vector<io::LabelledPoint> out;
   for (const auto* v : {&a, &b})
-    for (const auto& p : *v) out.push_back({p.p_w, p.label});
+    for (const auto& p : *v) out.push_back({p.p_w, io::plyLabel(p.label)});
   return out;
 }
 

@@ -481,7 +481,7 @@ Vector3d Estimator::landmarkWorld(const Landmark& lm) const {
 void Estimator::addToStaticMap(const Landmark& lm) {
   if (!initialized_ || !lm.usable() || lm.label != frontend::FeatureLabel::kStatic || lm.obs.size() < 3) return;
   if (!mapped_.insert(lm.id).second) return;
-  static_map_.push_back({landmarkWorld(lm), 0, lm.id});
+  static_map_.push_back({landmarkWorld(lm), frontend::FeatureLabel::kStatic, lm.id});
 }
 
 void Estimator::flushMap() {
@@ -513,7 +513,8 @@ void Estimator::postProcess(FrameResult& r) {
     if (meanReprojectionErrorPx(lm, lm.candidate_obs) > options_.outlier_px) {
       confirmed.push_back(id);
       dynamic_ids_.insert(id);
-      if (mapped_.insert(id).second) dynamic_map_.push_back({landmarkWorld(lm), 2, id});
+      if (mapped_.insert(id).second)
+        r.confirmed_points.push_back({landmarkWorld(lm), frontend::FeatureLabel::kConfirmedDynamic, id});
     } else if (lm.candidate_obs >= options_.clear_after_observations) {
       lm.label = frontend::FeatureLabel::kStatic;
       lm.candidate_obs = 0;
@@ -532,7 +533,8 @@ void Estimator::removeOutliers(FrameResult& r) {
     for (std::uint64_t id : bad) {
       if (!dynamic_ids_.insert(id).second) continue;
       ++r.outliers_confirmed;
-      if (mapped_.insert(id).second) dynamic_map_.push_back({landmarkWorld(fm_.landmarks().at(id)), 2, id});
+      if (mapped_.insert(id).second)
+        r.confirmed_points.push_back({landmarkWorld(fm_.landmarks().at(id)), frontend::FeatureLabel::kConfirmedDynamic, id});
     }
   }
   fm_.remove(bad);

@@ -52,10 +52,10 @@ struct EstimatorOptions {
   bool fix_gauge = true;
 };
 
-/// A map point with its label: 0 static, 1 eliminated in the front end, 2 confirmed dynamic.
+/// A map point: static, eliminated in the front end, or confirmed dynamic.
 struct MapPoint {
   Eigen::Vector3d p_w;
-  int label = 0;
+  frontend::FeatureLabel label = frontend::FeatureLabel::kStatic;
   std::uint64_t id = 0;
 };
 
@@ -101,6 +101,9 @@ struct FrameResult {
   int cleared = 0;           ///< candidates cleared to static after this solve
   std::vector<std::uint64_t> outlier_ids;  ///< landmarks removed by the outlier test after this solve
   int outliers_confirmed = 0;  ///< of those, confirmed dynamic (EstimatorOptions::confirm_outliers)
+  /// Landmarks confirmed dynamic at this frame (post-processing and confirmed outliers), where
+  /// they were: the dynamic map's confirmed points (pipeline::System collects them).
+  std::vector<MapPoint> confirmed_points;
   bool keyframe = false;
   double td_s = 0;  ///< camera–IMU time offset after this frame (the config's td unless estimate_td)
 };
@@ -125,9 +128,9 @@ class Estimator {
   const Rig& rig() const { return rig_; }
   /// IMU samples kept since the oldest window frame (for the motion prior).
   const std::vector<ImuSample>& imuHistory() const { return imu_; }
-  /// Static landmarks that left the window, and confirmed-dynamic ones (DESIGN §4.7).
+  /// Static landmarks that left the window (DESIGN §4.7; confirmed-dynamic ones come out in
+  /// FrameResult::confirmed_points).
   const std::vector<MapPoint>& staticMap() const { return static_map_; }
-  const std::vector<MapPoint>& dynamicMap() const { return dynamic_map_; }
   /// Moves the static landmarks still in the window into the static map (end of a run).
   void flushMap();
 
@@ -195,7 +198,7 @@ class Estimator {
   FeatureManager fm_;
   std::shared_ptr<MarginalizationPrior> prior_;
   Eigen::Isometry3d last_T_w_b_ = Eigen::Isometry3d::Identity();
-  std::vector<MapPoint> static_map_, dynamic_map_;
+  std::vector<MapPoint> static_map_;
   std::set<std::uint64_t> mapped_;
   /// Confirmed-dynamic landmark ids (DESIGN §4.6): they left the window for good, so
   /// later observations of the same front-end track are ignored.

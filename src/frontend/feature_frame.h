@@ -6,12 +6,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/label.h"
 #include "core/time.h"
 
 namespace idyvins::frontend {
 
-/// Label of a feature / landmark with respect to scene motion (DESIGN §4.3–4.6).
-enum class FeatureLabel : std::uint8_t { kStatic = 0, kCandidate = 1, kEliminated = 2 };
+using idyvins::FeatureLabel;  // core/label.h
 
 /// One tracked feature in the current frame.
 struct Feature {

@@ -584,7 +584,8 @@ cv::Mat drawTracks(const cv::Mat& left, const FeatureFrame& frame) {
     switch (l) {
       case FeatureLabel::kStatic: return cv::Scalar(0, 220, 0);
       case FeatureLabel::kCandidate: return cv::Scalar(0, 220, 255);
-      case FeatureLabel::kEliminated: return cv::Scalar(0, 0, 255);
+      case FeatureLabel::kEliminated:
+      case FeatureLabel::kConfirmedDynamic: return cv::Scalar(0, 0, 255);
     }
     return cv::Scalar(255, 255, 255);
   };

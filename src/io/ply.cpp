@@ -7,6 +7,14 @@
 
 namespace idyvins::io {
 
+int plyLabel(FeatureLabel label) {
+  switch (label) {
+    case FeatureLabel::kEliminated: return 1;
+    case FeatureLabel::kConfirmedDynamic: return 2;
+    default: return 0;
+  }
+}
+
 void writePly(const std::string& path, const std::vector<LabelledPoint>& points) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "w"), &std::fclose);
   if (!f) throw InputError(path, "cannot write file");

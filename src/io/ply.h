@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "core/label.h"
+
 namespace idyvins::io {
 
 /// One labelled point: label 0 static, 1 eliminated-dynamic, 2 confirmed-dynamic.
@@ -12,6 +14,9 @@ struct LabelledPoint {
   Eigen::Vector3d p;
   int label = 0;
 };
+
+/// The PLY label of a map point's label (static 0, eliminated 1, confirmed dynamic 2).
+int plyLabel(FeatureLabel label);
 
 /// Writes an ASCII PLY with properties x y z label red green blue (static gray,
 /// eliminated red, confirmed dynamic orange). Throws InputError if unwritable.

@@ -20,7 +20,7 @@ std::vector<int> histogram(const std::vector<double>& d) {
 std::unordered_set<std::uint64_t> confirmedIds(const Result& result) {
   std::unordered_set<std::uint64_t> ids;
   for (const auto& p : result.dynamic_map)
-    if (p.label == 2) ids.insert(p.id);
+    if (p.label == frontend::FeatureLabel::kConfirmedDynamic) ids.insert(p.id);
   return ids;
 }
 
@@ -74,7 +74,7 @@ void ObservationRecorder::writeCsv(const std::string& path, const Result& result
   if (!f) throw InputError(path, "cannot write file");
   f << "t_ns,id,u,v,track_length,frontend_label,d_s_px2,credibility,stereo_chi2,on_moving,confirmed_dynamic,"
        "in_static_map,outlier_removed,stereo_depth_m\n";
-  static const char* kLabels[] = {"static", "candidate", "eliminated"};
+  static const char* kLabels[] = {"static", "candidate", "eliminated", "confirmed_dynamic"};
   for (const auto& o : observations_)
     f << o.t_ns << ',' << o.id << ',' << o.u << ',' << o.v << ',' << o.track_length << ','
       << kLabels[static_cast<int>(o.label)] << ',' << o.d_s << ',' << o.credibility << ',' << o.stereo_chi2 << ','

@@ -215,7 +215,7 @@ void System::mapLostMoving(const frontend::FeatureFrame& ff, FrameOutput& out) {
   for (const auto& f : ff.lost_moving) {
     if (!f.has_right) continue;  // judged moving without a stereo point: labelled only
     if (const auto p_w = triangulateInRange(prev_T_w_c_->first, prev_T_w_c_->second, f))
-      out.eliminated_points.push_back({*p_w, 1, f.id});
+      out.eliminated_points.push_back({*p_w, frontend::FeatureLabel::kEliminated, f.id});
   }
 }
 
@@ -230,7 +230,8 @@ void System::mapEliminated(const frontend::FeatureFrame& ff, FrameOutput& out) {
   prev_T_w_c_.emplace(T_w_c0, T_w_c1);
   for (const auto& f : ff.removed)  // eliminated features with a stereo match: dynamic map
     if (f.has_right)
-      if (const auto p_w = triangulateInRange(T_w_c0, T_w_c1, f)) out.eliminated_points.push_back({*p_w, 1, f.id});
+      if (const auto p_w = triangulateInRange(T_w_c0, T_w_c1, f))
+        out.eliminated_points.push_back({*p_w, frontend::FeatureLabel::kEliminated, f.id});
 }
 
 void System::account(FrameOutput& out) {
@@ -256,6 +257,7 @@ void System::account(FrameOutput& out) {
   }
   s.last_status = r.status;
   eliminated_.insert(eliminated_.end(), out.eliminated_points.begin(), out.eliminated_points.end());
+  confirmed_.insert(confirmed_.end(), r.confirmed_points.begin(), r.confirmed_points.end());
 }
 
 Result System::finish() {
@@ -272,8 +274,8 @@ Result System::finish() {
   estimator_.flushMap();
   Result result;
   result.static_map = estimator_.staticMap();
-  result.dynamic_map = eliminated_;
-  for (const auto& p : estimator_.dynamicMap()) result.dynamic_map.push_back({p.p_w, 2, p.id});
+  result.dynamic_map = eliminated_;  // the one dynamic map: eliminated points, then confirmed ones
+  result.dynamic_map.insert(result.dynamic_map.end(), confirmed_.begin(), confirmed_.end());
   result.trajectory = trajectory_;
   result.summary = summary_;
   return result;

@@ -80,7 +80,7 @@ struct Summary {
 
 /// What finish() returns.
 struct Result {
-  std::vector<backend::MapPoint> static_map;   ///< label 0, id = landmark id
+  std::vector<backend::MapPoint> static_map;   ///< label kStatic, id = landmark id
   /// Eliminated points (label 1, in the order they were found) then confirmed-dynamic
   /// landmarks (label 2).
   std::vector<backend::MapPoint> dynamic_map;
@@ -180,7 +180,8 @@ class System {
   double td_s_ = 0;                      ///< camera–IMU offset (s): image stamp + td = IMU clock
   Summary summary_;
   std::vector<StampedState> trajectory_;
-  std::vector<backend::MapPoint> eliminated_;
+  std::vector<backend::MapPoint> eliminated_;  ///< dynamic map: triangulated eliminated features
+  std::vector<backend::MapPoint> confirmed_;   ///< dynamic map: landmarks the estimator confirmed dynamic
   /// Left and right camera poses of the previous frame (when it was initialized): the
   /// lost-corner test's points are triangulated in the frame they were seen in.
   std::optional<std::pair<Eigen::Isometry3d, Eigen::Isometry3d>> prev_T_w_c_;
