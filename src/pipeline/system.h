@@ -35,7 +35,7 @@ struct FrameOutput {
   backend::FrameResult estimate;    ///< initialized, body state, reset and status, solve and marginalization ms
   std::optional<dynamic::FrameStats> idy;  ///< IDY preprocessing statistics (idy modes only)
   /// Points the front end judged moving at this frame, triangulated in the world from their
-  /// stereo match (label 1, id = feature id): they go to the dynamic map.
+  /// stereo match (label kEliminated, id = feature id): they go to the dynamic map.
   std::vector<backend::MapPoint> eliminated_points;
 };
 
@@ -81,8 +81,8 @@ struct Summary {
 /// What finish() returns.
 struct Result {
   std::vector<backend::MapPoint> static_map;   ///< label kStatic, id = landmark id
-  /// Eliminated points (label 1, in the order they were found) then confirmed-dynamic
-  /// landmarks (label 2).
+  /// Eliminated points (kEliminated, in the order they were found) then confirmed-dynamic
+  /// landmarks (kConfirmedDynamic).
   std::vector<backend::MapPoint> dynamic_map;
   std::vector<StampedState> trajectory;  ///< every initialized frame
   Summary summary;
