@@ -27,7 +27,9 @@ run_one() {
   if [ ! -f "$res/vins_fusion_$name.ate.json" ]; then
     cp "$seq"/config/*.yaml "$cfg/"
     # VINS-Fusion's keys on top of the sequence's own config; the wall-clock cap lifted.
+    # (the topics are dropped first: OpenCV's FileStorage refuses a key written twice)
     sed -i -e 's/^max_solver_time:.*/max_solver_time: 10.0/' -e '/^mode:/d' -e '/^lambda_dy/d' \
+      -e '/^imu_topic:/d' -e '/^image[01]_topic:/d' \
       "$cfg/sim_stereo_imu_config.yaml"
     printf 'imu_topic: "/imu0"\nimage0_topic: "/cam0/image_raw"\nimage1_topic: "/cam1/image_raw"\noutput_path: "%s/"\nuse_imu: 1\nmultiple_thread: 0\nshow_track: 0\nload_previous_pose_graph: 0\npose_graph_save_path: "%s/"\nsave_image: 0\n' \
       "$OUT" "$OUT" >> "$cfg/sim_stereo_imu_config.yaml"

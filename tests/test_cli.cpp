@@ -162,8 +162,11 @@ TEST(Cli, RunIdyWritesOutputsAndObservationDump) {
   EXPECT_GT(on_moving, 500u);    // masks were read
   // Stereo test off in the config: no χ² in the dump.
   {
-    std::ofstream f(cfg, std::ios::app);
-    f << "stereo_motion_test: 0\n";
+    std::string text = idyvins::test::readFile(cfg);
+    const std::size_t at = text.find("stereo_motion_test: 1");
+    ASSERT_NE(at, std::string::npos) << "the simulator writes every key";
+    text.replace(at, 21, "stereo_motion_test: 0");
+    idyvins::test::writeFile(cfg, text);
   }
   const Result off = run("run --config " + cfg + " --dataset " + (dir / "ds") + " --out " + (dir / "out2") +
                          " --mode idy --frames 30 --dump-observations " + (dir / "obs2.csv"));

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <regex>
 
 #include "core/error.h"
@@ -53,6 +54,78 @@ TEST(Config, ShippedConfigsLoad) {
     EXPECT_EQ(c.num_cam, 2);
     EXPECT_EQ(c.cams.size(), 2u);
     EXPECT_FALSE(describe(c).empty());
+  }
+}
+
+/// The shipped configs and VIODE's published one.
+std::vector<std::string> knownConfigs() {
+  return {configPath("euroc/euroc_stereo_imu_config.yaml"), configPath("viode/viode_stereo_imu_config.yaml"),
+          configPath("sim/sim_stereo_imu_config.yaml"), sharedData("viode_calibration/calibration.yaml")};
+}
+
+/// Every parameter of two configs equal, exactly (paths aside).
+void expectSameParameters(const Config& a, const Config& b) {
+  ASSERT_EQ(a.cams.size(), b.cams.size());
+  for (std::size_t i = 0; i < a.cams.size(); ++i) {
+    const auto &x = a.cams[i], &y = b.cams[i];
+    EXPECT_TRUE(x.type == y.type && x.width == y.width && x.height == y.height && x.fx == y.fx && x.fy == y.fy &&
+                x.cx == y.cx && x.cy == y.cy && x.dist == y.dist)
+        << "camera " << i;
+    EXPECT_TRUE(a.T_b_c[i].matrix() == b.T_b_c[i].matrix()) << "body_T_cam" << i;
+  }
+  // The listing names every other key with its value (shortest exact text), so equal
+  // listings (first line and camera file paths aside) mean equal parameters.
+  auto keys = [](const Config& c) {
+    std::string d = describe(c);
+    d = d.substr(d.find('\n') + 1);
+    return std::regex_replace(d, std::regex("cam[01]_calib: [^ ]+"), "camX_calib");
+  };
+  EXPECT_EQ(keys(a), keys(b));
+  EXPECT_EQ(a.estimate_td, b.estimate_td);
+  EXPECT_EQ(a.td_s, b.td_s);
+  EXPECT_EQ(a.imu.acc_n, b.imu.acc_n);
+  EXPECT_EQ(a.dynamic.stereo.min_disparity_px, b.dynamic.stereo.min_disparity_px);
+}
+
+TEST(Config, SaveThenLoadGivesTheSameParametersForEveryKnownConfig) {
+  test::TempDir dir;
+  int n = 0;
+  for (const std::string& path : knownConfigs()) {
+    SCOPED_TRACE(path);
+    const Config original = loadConfig(path);
+    const std::string saved = dir / ("c" + std::to_string(n++) + "/config.yaml");
+    std::filesystem::create_directories(std::filesystem::path(saved).parent_path());
+    saveConfig(original, saved);
+    const Config reloaded = loadConfig(saved);
+    expectSameParameters(original, reloaded);
+  }
+}
+
+TEST(Config, EveryKeyLoadReadsIsPrintedAndSaved) {
+  test::TempDir dir;
+  // A config with every optional key set away from its default.
+  Config c = loadConfig(configPath("viode/viode_stereo_imu_config.yaml"));
+  c.estimate_td = true;
+  c.td_s = 0.0123;
+  c.tracker.equalize = true;
+  c.tracker.stereo_refine = true;
+  c.solver.time_limited = true;
+  c.dynamic.stereo.remove_chi2 = 80;
+  c.dynamic.stereo.min_disparity_px = 0.5;
+  c.dynamic.lost_track_test = false;
+  c.groundtruth_topic = "/odometry";
+  c.segmentation_topic = "/cam0/segmentation";
+  c.segmentation_rgb_ids = configPath("viode/rgb_ids.txt");
+  c.segmentation_vehicle_ids = configPath("viode/vehicle_ids_city_day.txt");
+  saveConfig(c, dir / "all.yaml");
+  std::vector<std::string> read;
+  const Config loaded = loadConfig(dir / "all.yaml", &read);
+  expectSameParameters(c, loaded);
+  EXPECT_GE(read.size(), 50u);
+  const std::string listing = describe(loaded), file = test::readFile(dir / "all.yaml");
+  for (const std::string& key : read) {
+    EXPECT_NE(listing.find(key + ":"), std::string::npos) << key << " is read but not printed";
+    EXPECT_NE(file.find(key + ":"), std::string::npos) << key << " is read but not saved";
   }
 }
 

@@ -50,12 +50,17 @@ void writeBag(const SimulateArgs& a, const std::string& scene, const std::string
   w.vehicle_ids = (config_dir / vehicles).string();
   const std::string bag = (fs::path(out) / viodeBagName(level)).string();
   io::writeViodeBag(io::readEurocDataset(out), bag, w);
-  std::ofstream cfg(config_dir / "sim_stereo_imu_config.yaml", std::ios::app);
-  cfg << "\n# ROS1 bag (" << viodeBagName(level) << "): VIODE's topics\n"
-      << "imu_topic: \"/imu0\"\nimage0_topic: \"/cam0/image_raw\"\nimage1_topic: \"/cam1/image_raw\"\n"
-      << "groundtruth_topic: \"/odometry\"\nsegmentation_topic: \"/cam0/segmentation\"\n"
-      << "segmentation_rgb_ids: \"rgb_ids.txt\"\nsegmentation_vehicle_ids: \"" << vehicles << "\"\n";
-  if (!cfg) throw InputError((config_dir / "sim_stereo_imu_config.yaml").string(), "cannot append the bag topics");
+  // The config names VIODE's topics and the colour tables.
+  const std::string config_path = (config_dir / "sim_stereo_imu_config.yaml").string();
+  Config cfg = loadConfig(config_path);
+  cfg.imu_topic = "/imu0";
+  cfg.image0_topic = "/cam0/image_raw";
+  cfg.image1_topic = "/cam1/image_raw";
+  cfg.groundtruth_topic = "/odometry";
+  cfg.segmentation_topic = "/cam0/segmentation";
+  cfg.segmentation_rgb_ids = "rgb_ids.txt";
+  cfg.segmentation_vehicle_ids = vehicles;
+  saveConfig(cfg, config_path);
   if (a.format == "bag") fs::remove_all(fs::path(out) / "mav0");
   std::printf("%s: VIODE topics /imu0 /cam0/image_raw /cam1/image_raw /odometry /cam0/segmentation\n", bag.c_str());
 }

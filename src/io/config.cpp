@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/SVD>
+#include <charconv>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -14,12 +15,16 @@ namespace fs = std::filesystem;
 namespace idyvins {
 namespace {
 
+/// A rotation block orthonormal within this (Frobenius norm of R Rᵀ − I) is taken as it is.
+constexpr double kOrthonormalTolerance = 1e-14;
+
 constexpr const char* kModeNames[] = {"baseline", "ransac", "seg", "idy", "idy-pre", "idy-ba"};
 
 /// YAML document with its file name, for messages with line numbers.
 struct YamlFile {
   std::string path;
   YAML::Node root;
+  std::vector<std::string>* keys_read = nullptr;  ///< top-level keys read, when recorded
 };
 
 YamlFile loadYaml(const std::string& path) {
@@ -46,6 +51,7 @@ int lineOf(const YAML::Node& node) { return node.Mark().line + 1; }
 YAML::Node require(const YamlFile& f, const YAML::Node& parent, const std::string& key,
                    const std::string& what) {
   YAML::Node node = parent[key];
+  if (f.keys_read && node && parent == f.root) f.keys_read->push_back(key);
   if (!node) throw InputError(f.path, "missing required key '" + key + "' (" + what + ")");
   return node;
 }
@@ -117,9 +123,13 @@ Eigen::Isometry3d getTransform(const YamlFile& f, const std::string& key) {
                      "key '" + key + "': expected a rigid transform (rotation block orthonormal "
                      "with det +1, last row 0 0 0 1)");
   }
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = svd.matrixU() * svd.matrixV().transpose();
+  t.linear() = r;
+  // Re-orthonormalized unless it already is to rounding (then a saved config reads back exactly).
+  if ((r * r.transpose() - Eigen::Matrix3d::Identity()).norm() > kOrthonormalTolerance) {
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    t.linear() = svd.matrixU() * svd.matrixV().transpose();
+  }
   t.translation() = m.topRightCorner<3, 1>();
   return t;
 }
@@ -307,8 +317,9 @@ void readDynamic(const YamlFile& f, const std::string& path, Config& c) {
 
 }  // namespace
 
-Config loadConfig(const std::string& path) {
-  const YamlFile f = loadYaml(path);
+Config loadConfig(const std::string& path, std::vector<std::string>* keys_read) {
+  YamlFile f = loadYaml(path);
+  f.keys_read = keys_read;
   Config c;
   c.path = path;
   c.use_imu = getInt(f, f.root, "imu", "1 to use the IMU, 0 for vision only") != 0;
@@ -343,43 +354,153 @@ Config loadConfig(const std::string& path) {
   return c;
 }
 
+namespace {
+
+/// The shortest decimal text that reads back as the same double.
+std::string number(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, r.ptr);
+}
+
+std::string matrixYaml(const Eigen::Matrix4d& m) {
+  std::string s = " !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: d\n   data: [";
+  for (int i = 0; i < 16; ++i) s += (i ? ", " : "") + number(m(i / 4, i % 4));
+  return s + "]\n";
+}
+
+void writeFile(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw InputError(path, "cannot write file");
+}
+
+/// key value lines of one group; a string value is quoted.
+struct KeyLines {
+  std::string text;
+  KeyLines& operator()(const char* key, double v) { return add(key, number(v)); }
+  KeyLines& operator()(const char* key, int v) { return add(key, std::to_string(v)); }
+  KeyLines& operator()(const char* key, bool v) { return add(key, v ? "1" : "0"); }
+  KeyLines& operator()(const char* key, const std::string& v) { return add(key, "\"" + v + "\""); }
+  KeyLines& add(const char* key, const std::string& v) {
+    text += std::string(key) + ": " + v + "\n";
+    return *this;
+  }
+};
+
+/// Every key of the config but the cameras' and the extrinsics, in groups, as saveConfig
+/// writes them and describe prints them.
+std::vector<std::pair<std::string, KeyLines>> keyGroups(const Config& c) {
+  std::vector<std::pair<std::string, KeyLines>> g;
+  g.push_back({"IMU noise (VINS-Fusion semantics, docs/conventions.md)",
+                KeyLines()("acc_n", c.imu.acc_n)("gyr_n", c.imu.gyr_n)("acc_w", c.imu.acc_w)("gyr_w", c.imu.gyr_w)(
+                    "g_norm", c.imu.g_norm)});
+  const TrackerOptions& t = c.tracker;
+  g.push_back({"Feature tracker", KeyLines()("max_cnt", t.max_cnt)("min_dist", t.min_dist)("F_threshold", t.f_threshold)(
+                                      "flow_back", t.flow_back)("equalize", t.equalize)(
+                                      "stereo_gain_compensation", t.stereo_gain_compensation)(
+                                      "stereo_epipolar_px", t.stereo_epipolar_px)("stereo_refine", t.stereo_refine)});
+  const SolverOptions& s = c.solver;
+  g.push_back({"Sliding-window optimization",
+                KeyLines()("max_solver_time", s.max_solver_time_s)("max_num_iterations", s.max_num_iterations)(
+                    "keyframe_parallax", s.keyframe_parallax_px)("solver_time_limit", s.time_limited)(
+                    "solver_function_tolerance", s.function_tolerance)});
+  g.push_back({"Camera-IMU time offset: image stamp + td = IMU time (s)",
+                KeyLines()("estimate_td", c.estimate_td)("td", c.td_s)});
+  const DynamicOptions& d = c.dynamic;
+  const StereoMotionOptions& m = d.stereo;
+  g.push_back({"IDY-VINS", KeyLines()("mode", std::string(toString(d.mode)))("lambda_dy", d.lambda_dy)(
+                               "lambda_dy_c", d.lambda_dy_c)("confirm_outliers_dynamic", d.confirm_outliers)(
+                               "lost_track_test", d.lost_track_test)});
+  g.push_back({"IDY-VINS stereo motion test",
+                KeyLines()("stereo_motion_test", m.enabled)("stereo_motion_chi2", m.chi2)(
+                    "stereo_motion_sigma_px", m.sigma_px)("stereo_motion_strikes", m.strikes)(
+                    "stereo_motion_anchor_frames", m.anchor_frames)("stereo_motion_drift_mps", m.drift_mps)(
+                    "stereo_motion_remove_chi2", m.remove_chi2)("stereo_motion_persistent_strikes", m.persistent_strikes)(
+                    "stereo_motion_left_chi2", m.left_chi2)("stereo_motion_noise_ref", m.noise_ref)(
+                    "stereo_motion_noise_quantile", m.noise_quantile)(
+                    "stereo_motion_min_disparity_px", m.min_disparity_px)});
+  KeyLines topics;
+  topics("imu_topic", c.imu_topic)("image0_topic", c.image0_topic)("image1_topic", c.image1_topic);
+  if (!c.groundtruth_topic.empty()) topics("groundtruth_topic", c.groundtruth_topic);
+  if (!c.segmentation_topic.empty())
+    topics("segmentation_topic", c.segmentation_topic)("segmentation_rgb_ids", c.segmentation_rgb_ids)(
+        "segmentation_vehicle_ids", c.segmentation_vehicle_ids);
+  g.push_back({"ROS1 bag topics", topics});
+  return g;
+}
+
+std::string indented(const std::string& lines, const std::string& indent) {
+  std::string out;
+  std::istringstream in(lines);
+  for (std::string line; std::getline(in, line);) out += indent + line + "\n";
+  return out;
+}
+
+}  // namespace
+
 std::string describe(const Config& c) {
   std::ostringstream o;
   o << "config: " << c.path << "\n";
-  o << "  imu: " << (c.use_imu ? "yes" : "no") << ", cameras: " << c.num_cam << ", image "
-    << c.image_width << "x" << c.image_height << "\n";
+  o << "  imu: " << (c.use_imu ? 1 : 0) << ", num_of_cam: " << c.num_cam << ", image_width: " << c.image_width
+    << ", image_height: " << c.image_height << "\n";
   for (std::size_t i = 0; i < c.cams.size(); ++i) {
     const auto& k = c.cams[i];
-    o << "  cam" << i << ": " << camera::toString(k.type) << " f=(" << k.fx << ", " << k.fy
-      << ") c=(" << k.cx << ", " << k.cy << ") dist=[" << k.dist[0] << ", " << k.dist[1] << ", "
-      << k.dist[2] << ", " << k.dist[3] << "] from " << c.cam_paths[i] << "\n";
+    o << "  cam" << i << "_calib: " << c.cam_paths[i] << " (" << camera::toString(k.type) << " f=(" << k.fx << ", "
+      << k.fy << ") c=(" << k.cx << ", " << k.cy << ") dist=[" << k.dist[0] << ", " << k.dist[1] << ", " << k.dist[2]
+      << ", " << k.dist[3] << "])\n";
     const Eigen::Vector3d t = c.T_b_c[i].translation();
-    o << "        t_b_c = [" << t.transpose() << "] m\n";
+    o << "  body_T_cam" << i << ": t = [" << t.transpose() << "] m\n";
   }
   if (c.cams.size() == 2) {
     const Eigen::Isometry3d T_c0_c1 = c.T_b_c[0].inverse() * c.T_b_c[1];
     o << "  stereo baseline: " << T_c0_c1.translation().norm() << " m\n";
   }
-  if (c.use_imu)
-    o << "  imu noise: acc_n " << c.imu.acc_n << ", gyr_n " << c.imu.gyr_n << ", acc_w "
-      << c.imu.acc_w << ", gyr_w " << c.imu.gyr_w << ", g_norm " << c.imu.g_norm << "\n";
-  o << "  tracker: max_cnt " << c.tracker.max_cnt << ", min_dist " << c.tracker.min_dist
-    << ", F_threshold " << c.tracker.f_threshold << ", flow_back " << c.tracker.flow_back << ", equalize "
-    << c.tracker.equalize << ", stereo_gain_compensation " << c.tracker.stereo_gain_compensation
-    << ", stereo_epipolar_px " << c.tracker.stereo_epipolar_px << ", stereo_refine " << c.tracker.stereo_refine << "\n";
-  o << "  solver: max_num_iterations " << c.solver.max_num_iterations << ", max_solver_time "
-    << c.solver.max_solver_time_s << " s ("
+  for (const auto& [title, keys] : keyGroups(c)) o << "  # " << title << "\n" << indented(keys.text, "  ");
+  o << "  (max_solver_time "
     << (c.solver.time_limited ? "applied: solver_time_limit 1, results depend on load" : "not applied: deterministic")
-    << "), function_tolerance " << c.solver.function_tolerance << ", keyframe_parallax "
-    << c.solver.keyframe_parallax_px << " px\n";
-  o << "  td: " << c.td_s << " s (estimate_td " << c.estimate_td << ")\n";
-  o << "  mode: " << toString(c.dynamic.mode) << ", lambda_dy " << c.dynamic.lambda_dy
-    << " px^2, lambda_dy_c " << c.dynamic.lambda_dy_c << " px^2, outliers confirmed dynamic: "
-    << (c.dynamic.confirm_outliers ? "yes" : "no") << "\n";
-  o << "  stereo motion test: " << (c.dynamic.stereo.enabled ? "on" : "off") << " (chi2 " << c.dynamic.stereo.chi2
-    << ", sigma " << c.dynamic.stereo.sigma_px << " px, " << c.dynamic.stereo.strikes << " strikes, anchor " << c.dynamic.stereo.anchor_frames
-    << " frames, drift " << c.dynamic.stereo.drift_mps << " m/s)\n";
+    << ")\n";
   return o.str();
+}
+
+void saveCameraFile(const camera::CameraParams& k, const std::string& path) {
+  std::string s = "%YAML:1.0\n---\n";
+  const bool pinhole = k.type == camera::ModelType::kPinhole;
+  s += std::string("model_type: ") + (pinhole ? "PINHOLE" : "KANNALA_BRANDT") + "\n";
+  s += "camera_name: " + (k.name.empty() ? std::string("camera") : k.name) + "\n";
+  s += "image_width: " + std::to_string(k.width) + "\nimage_height: " + std::to_string(k.height) + "\n";
+  const char* dk[] = {"k1", "k2", "p1", "p2"};
+  const char* kb[] = {"k2", "k3", "k4", "k5"};
+  if (pinhole) {
+    s += "distortion_parameters:\n";
+    for (int i = 0; i < 4; ++i) s += std::string("   ") + dk[i] + ": " + number(k.dist[i]) + "\n";
+    s += "projection_parameters:\n   fx: " + number(k.fx) + "\n   fy: " + number(k.fy) + "\n   cx: " + number(k.cx) +
+         "\n   cy: " + number(k.cy) + "\n";
+  } else {
+    s += "projection_parameters:\n";
+    for (int i = 0; i < 4; ++i) s += std::string("   ") + kb[i] + ": " + number(k.dist[i]) + "\n";
+    s += "   mu: " + number(k.fx) + "\n   mv: " + number(k.fy) + "\n   u0: " + number(k.cx) + "\n   v0: " +
+         number(k.cy) + "\n";
+  }
+  writeFile(path, s);
+}
+
+void saveConfig(const Config& c, const std::string& path) {
+  const fs::path folder = fs::path(path).parent_path();
+  std::string s = "%YAML:1.0\n# idyvins config (VINS-Fusion format)\n";
+  s += "imu: " + std::to_string(c.use_imu ? 1 : 0) + "\nnum_of_cam: " + std::to_string(c.num_cam) + "\n";
+  for (int i = 0; i < c.num_cam; ++i) {
+    const std::string name = i < static_cast<int>(c.cam_paths.size()) && !c.cam_paths[i].empty()
+                                 ? fs::path(c.cam_paths[i]).filename().string()
+                                 : "cam" + std::to_string(i) + ".yaml";
+    saveCameraFile(c.cams.at(i), (folder / name).string());
+    s += "cam" + std::to_string(i) + "_calib: \"" + name + "\"\n";
+  }
+  s += "image_width: " + std::to_string(c.image_width) + "\nimage_height: " + std::to_string(c.image_height) + "\n";
+  s += "# VINS-Fusion's key, for its readers: idyvins keeps the extrinsics fixed\nestimate_extrinsic: 0\n";
+  for (int i = 0; i < c.num_cam; ++i) s += "body_T_cam" + std::to_string(i) + ":" + matrixYaml(c.T_b_c.at(i).matrix());
+  for (const auto& [title, keys] : keyGroups(c)) s += "\n# " + title + "\n" + keys.text;
+  writeFile(path, s);
 }
 
 }  // namespace idyvins

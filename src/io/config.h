@@ -151,10 +151,21 @@ struct Config {
 camera::CameraParams loadCameraFile(const std::string& path);
 
 /// Reads and validates a VINS-Fusion config; camX_calib paths resolve against
-/// the config's folder. Throws InputError naming file, line and expectation.
-Config loadConfig(const std::string& path);
+/// the config's folder. Throws InputError naming file, line and expectation. With
+/// `keys_read`, the names of the config's keys it read (camera files aside) are appended.
+Config loadConfig(const std::string& path, std::vector<std::string>* keys_read = nullptr);
 
-/// Multi-line, human-readable listing of every value (for `--verbose` / info).
+/// Multi-line listing of every config key's value under its key name (what `info`
+/// prints): every key loadConfig reads appears in it.
 std::string describe(const Config& config);
+
+/// Writes `config` as a VINS-Fusion config at `path` with every key loadConfig reads, and
+/// its camera files next to it (camX_calib names: the file names of config.cam_paths, or
+/// cam<i>.yaml); numbers are written so that loadConfig gives them back exactly. Throws
+/// InputError when a file cannot be written.
+void saveConfig(const Config& config, const std::string& path);
+
+/// Writes a camodocal camera file (PINHOLE or KANNALA_BRANDT) loadCameraFile reads back exactly.
+void saveCameraFile(const camera::CameraParams& camera, const std::string& path);
 
 }  // namespace idyvins

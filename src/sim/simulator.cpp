@@ -256,48 +256,33 @@ nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult
 
 }  // namespace
 
+namespace {
+
+/// v to `digits` significant decimal digits.
+double significant(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*g", digits, v);
+  return std::strtod(buf, nullptr);
+}
+
+}  // namespace
+
 void writeVinsConfig(const Config& c, const std::string& folder, const std::string& name) {
   const fs::path dir(folder);
   fs::create_directories(dir);
-  for (int i = 0; i < c.num_cam; ++i) {
-    const auto& p = c.cams[i];
-    char buf[1024];
-    std::snprintf(buf, sizeof(buf),
-                  "%%YAML:1.0\n---\nmodel_type: PINHOLE\ncamera_name: cam%d\nimage_width: %d\nimage_height: %d\n"
-                  "distortion_parameters:\n   k1: %.10g\n   k2: %.10g\n   p1: %.10g\n   p2: %.10g\n"
-                  "projection_parameters:\n   fx: %.10g\n   fy: %.10g\n   cx: %.10g\n   cy: %.10g\n",
-                  i, p.width, p.height, p.dist[0], p.dist[1], p.dist[2], p.dist[3], p.fx, p.fy, p.cx, p.cy);
-    writeText(dir / c.cam_paths[i], buf);
+  // The values the simulator's configs have always carried: IMU keys to 6 significant
+  // digits, extrinsics and intrinsics to 10 (so that old and new renders run alike).
+  Config w = c;
+  for (double* v : {&w.imu.acc_n, &w.imu.gyr_n, &w.imu.acc_w, &w.imu.gyr_w, &w.imu.g_norm}) *v = significant(*v, 6);
+  for (auto& T : w.T_b_c) {
+    Eigen::Matrix4d m = T.matrix();
+    for (int k = 0; k < 16; ++k) m(k / 4, k % 4) = significant(m(k / 4, k % 4), 10);
+    T.matrix() = m;
   }
-  std::string s = "%YAML:1.0\n# Written by idyvins simulate: the simulated stereo rig and IMU.\n";
-  s += "imu: 1\nnum_of_cam: " + std::to_string(c.num_cam) + "\n\n";
-  for (int i = 0; i < c.num_cam; ++i) s += "cam" + std::to_string(i) + "_calib: \"" + c.cam_paths[i] + "\"\n";
-  s += "image_width: " + std::to_string(c.image_width) + "\nimage_height: " + std::to_string(c.image_height) + "\n\n";
-  s += "estimate_extrinsic: 0\n";
-  for (int i = 0; i < c.num_cam; ++i)
-    s += "body_T_cam" + std::to_string(i) + ": !!opencv-matrix\n" + matrixYaml(c.T_b_c[i].matrix(), "   ");
-  char buf[1024];
-  std::snprintf(buf, sizeof(buf),
-                "\n# Feature tracker\nmax_cnt: %d\nmin_dist: %g\nF_threshold: %g\nflow_back: %d\n\n"
-                "# Sliding-window optimization\nmax_solver_time: %g\nmax_num_iterations: %d\nkeyframe_parallax: %g\n\n"
-                "# IMU noise (VINS-Fusion semantics, see docs/conventions.md)\nacc_n: %.6g\ngyr_n: %.6g\n"
-                "acc_w: %.6g\ngyr_w: %.6g\ng_norm: %.6g\n\nestimate_td: 0\ntd: 0.0\n\n"
-                "# IDY-VINS\nmode: %s\nlambda_dy: %g\nlambda_dy_c: %g\n",
-                c.tracker.max_cnt, c.tracker.min_dist, c.tracker.f_threshold, c.tracker.flow_back ? 1 : 0,
-                c.solver.max_solver_time_s, c.solver.max_num_iterations, c.solver.keyframe_parallax_px, c.imu.acc_n,
-                c.imu.gyr_n, c.imu.acc_w, c.imu.gyr_w, c.imu.g_norm, toString(c.dynamic.mode), c.dynamic.lambda_dy,
-                c.dynamic.lambda_dy_c);
-  s += buf;
-  if (c.tracker.stereo_refine) s += "\n# Camera realism: right matches refined gain/bias-invariantly\nstereo_refine: 1\n";
-  if (c.dynamic.stereo.remove_chi2 > 0) {
-    std::snprintf(buf, sizeof(buf),
-                  "# Camera realism: a repeated stereo-test failure removes only above this chi2 or after\n"
-                  "# this many failures in a row (young static tracks on noisy images fail with chi2 20-60)\n"
-                  "stereo_motion_remove_chi2: %g\nstereo_motion_persistent_strikes: %d\n",
-                  c.dynamic.stereo.remove_chi2, c.dynamic.stereo.persistent_strikes);
-    s += buf;
-  }
-  writeText(dir / name, s);
+  for (auto& cam : w.cams)
+    for (double* v : {&cam.fx, &cam.fy, &cam.cx, &cam.cy, &cam.dist[0], &cam.dist[1], &cam.dist[2], &cam.dist[3]})
+      *v = significant(*v, 10);
+  saveConfig(w, (dir / name).string());
 }
 
 Scene::Scene(const SimOptions& o)
