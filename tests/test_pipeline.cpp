@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "eval/trajectory_metrics.h"
+#include "pipeline/modes.h"
 #include "pipeline/observers.h"
 #include "pipeline/system.h"
 #include "sim/simulator.h"
@@ -267,6 +268,26 @@ TEST(PipelineTimeOffset, AppliesTdAndEstimatesATenMillisecondOffsetWithTheAccura
 
   std::printf("10 ms offset: ATE %.4f m with td known, %.4f m ignored, %.4f m estimated (mean of the last 5 s: %.3f ms)\n",
               ate(right), ate(ignored), ate(estimated), 1e3 * mean_td);
+}
+
+TEST(Modes, EveryModeHasARowAndTheRowsAreThePapersTableI) {
+  const std::string names = modeNames();
+  std::size_t start = 0, rows = 0;
+  while (start <= names.size()) {
+    const std::size_t end = std::min(names.find('|', start), names.size());
+    Mode mode;
+    ASSERT_TRUE(parseMode(names.substr(start, end - start), mode));
+    EXPECT_NO_THROW(traitsOf(mode));
+    ++rows;
+    start = end + 1;
+  }
+  EXPECT_EQ(rows, 6u);
+  // idy = preprocessing (elimination) + robust BA (weights, post-processing); the ablations drop one each.
+  EXPECT_TRUE(traitsOf(Mode::kIdy).eliminate && traitsOf(Mode::kIdy).weights_and_post);
+  EXPECT_TRUE(traitsOf(Mode::kIdyPre).eliminate && !traitsOf(Mode::kIdyPre).weights_and_post);
+  EXPECT_TRUE(!traitsOf(Mode::kIdyBa).eliminate && traitsOf(Mode::kIdyBa).weights_and_post);
+  EXPECT_EQ(traitsOf(Mode::kBaseline).filter, FilterKind::kNone);
+  EXPECT_TRUE(traitsOf(Mode::kSeg).needs_masks);
 }
 
 TEST(PipelineSystem, RejectsConfigsAndFramesItCannotRun) {

@@ -16,6 +16,7 @@
 #include "io/config.h"
 #include "io/data_source.h"
 #include "progress.h"
+#include "pipeline/modes.h"
 
 namespace idyvins::app {
 namespace {
@@ -29,10 +30,10 @@ struct TrackArgs {
 int runTrack(const TrackArgs& a) {
   Config config = loadConfig(a.config);
   Mode mode;
-  if (!parseMode(a.mode, mode) || (mode != Mode::kBaseline && mode != Mode::kRansac && mode != Mode::kSeg))
+  if (!parseMode(a.mode, mode) || pipeline::traitsOf(mode).filter == pipeline::FilterKind::kIdy)
     throw CLI::ValidationError("--mode", "expected baseline|ransac|seg for the front end alone, got '" + a.mode + "'");
   config.dynamic.mode = mode;
-  const Input in = openInput(a.dataset, config, "", /*masks=*/mode == Mode::kSeg);  // a folder or a bag
+  const Input in = openInput(a.dataset, config, "", pipeline::traitsOf(mode).needs_masks);  // a folder or a bag
   io::DataSource& source = *in.source;
   if (!a.save_tracks.empty()) {
     std::error_code ec;

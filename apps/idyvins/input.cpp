@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "io/bag_dataset.h"
 #include "io/euroc_dataset.h"
+#include "pipeline/modes.h"
 
 namespace idyvins::app {
 
@@ -15,7 +16,7 @@ Input openInput(const std::string& dataset, const Config& config, const std::str
                                       config.image_height);
     Input in;
     in.has_masks = masks && !index.segmentation.empty();
-    if (config.dynamic.mode == Mode::kSeg && !in.has_masks)
+    if (pipeline::traitsOf(config.dynamic.mode).needs_masks && !in.has_masks)
       throw InputError(dataset, "mode seg needs ground-truth masks: a segmentation_topic in the config (VIODE: "
                                 "/cam0/segmentation)");
     std::optional<io::SegmentationColors> colors;
@@ -31,7 +32,7 @@ Input openInput(const std::string& dataset, const Config& config, const std::str
   for (const auto& g : ds.groundtruth) in.groundtruth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
   in.has_masks =
       masks && !ds.cam0.empty() && std::filesystem::is_directory(std::filesystem::path(ds.root) / "cam0" / "mask");
-  if (config.dynamic.mode == Mode::kSeg && !in.has_masks)
+  if (pipeline::traitsOf(config.dynamic.mode).needs_masks && !in.has_masks)
     throw InputError(ds.root, "mode seg needs mav0/cam0/mask/ (ground-truth masks)");
   in.source = std::make_unique<io::EurocSource>(std::move(ds), config.image_width, config.image_height, in.has_masks);
   return in;

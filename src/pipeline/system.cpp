@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "core/error.h"
+#include "pipeline/modes.h"
 #include "imu/preintegration.h"
 
 namespace idyvins::pipeline {
@@ -16,7 +17,7 @@ namespace {
 
 backend::EstimatorOptions estimatorOptionsFor(Mode mode, const Config& config) {
   backend::EstimatorOptions o;
-  o.candidate_weights = o.post_process = mode == Mode::kIdy || mode == Mode::kIdyBa;  // DESIGN §4.5, §4.6
+  o.candidate_weights = o.post_process = traitsOf(mode).weights_and_post;  // DESIGN §4.5, §4.6
   o.confirm_outliers = o.post_process && config.dynamic.confirm_outliers;           // DESIGN §4.9
   return o;
 }
