@@ -188,7 +188,7 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
     const auto& it = items[tracked[k]];
     raw[k] = epipolarErrorPx2(it.prev_xy, it.feature->xy, R, ctx.prior->t_prev_cur, fx, fy);
     ds[k] = raw[k] / sigma;
-    it.feature->score = ds[k];
+    it.feature->d_s_px2 = ds[k];
   }
   stats_.d_s = ds;
   const std::vector<bool> removed = eliminateAndMark(items, tracked, raw, ds);

@@ -29,7 +29,7 @@ struct Feature {
   Eigen::Vector2d velocity_xy_right = Eigen::Vector2d::Zero();
   int track_length = 1;  ///< frames this id has been tracked (1 = new)
   FeatureLabel label = FeatureLabel::kStatic;
-  double score = 0;      ///< filter's per-feature score (IDY: d_s, px²), 0 if none
+  double d_s_px2 = 0;    ///< IDY: the minimum projection error d_s (px², DESIGN §4.2), 0 if not scored
   double stereo_chi2 = -1;  ///< IDY stereo motion test's χ² (4 dof), -1 if not tested
   double stereo_depth = 0;  ///< depth (m) of the stereo test's anchor point, 0 if not tested
 };

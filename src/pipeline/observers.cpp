@@ -40,7 +40,7 @@ void ObservationRecorder::onFrame(const StereoFrame& input, const FrameOutput& o
     eval::addObservation(tracks_, {f.id, moving, f.label == frontend::FeatureLabel::kEliminated});
     if (keep_observations_)
       observations_.push_back({f.id, moving, output.t_ns, static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y()),
-                               static_cast<float>(f.score), cred, static_cast<float>(f.stereo_chi2),
+                               static_cast<float>(f.d_s_px2), cred, static_cast<float>(f.stereo_chi2),
                                static_cast<float>(f.stereo_depth), f.label,
                                f.track_length});
   };
