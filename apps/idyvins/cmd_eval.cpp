@@ -54,65 +54,79 @@ std::vector<double> parseDeltas(const std::string& text) {
   return out;
 }
 
-int runEval(const EvalArgs& a) {
+/// What eval computed, for printing.
+struct EvalOutcome {
   eval::AlignMode mode;
-  if (!eval::parseAlignMode(a.align, mode))
+  eval::AteResult ate;
+  std::vector<std::pair<double, eval::ErrorStats>> rpes;
+  double path = 0;
+  std::size_t ref_poses = 0, est_poses = 0;
+};
+
+void printJson(const EvalArgs& a, const EvalOutcome& o) {
+  nlohmann::json j = {{"reference", a.gt},
+                      {"estimate", a.est},
+                      {"align", toString(o.mode)},
+                      {"max_dt_s", a.max_dt},
+                      {"pairs", o.ate.pairs.size()},
+                      {"reference_poses", o.ref_poses},
+                      {"estimate_poses", o.est_poses},
+                      {"path_length_m", o.path},
+                      {"scale", o.ate.alignment.s},
+                      {"ate", statsJson(o.ate.stats)},
+                      {"rpe", nlohmann::json::array()}};
+  for (const auto& [d, s] : o.rpes) j["rpe"].push_back({{"delta_m", d}, {"stats", statsJson(s)}});
+  std::cout << j.dump(2) << "\n";
+}
+
+void printText(const EvalArgs& a, const EvalOutcome& o) {
+  std::printf("reference: %s (%zu poses)\nestimate:  %s (%zu poses)\n", a.gt.c_str(), o.ref_poses, a.est.c_str(),
+              o.est_poses);
+  std::printf("pairs: %zu (max dt %.3f s), alignment: %s", o.ate.pairs.size(), a.max_dt, toString(o.mode));
+  if (o.mode == eval::AlignMode::kSim3) std::printf(" (scale %.6f)", o.ate.alignment.s);
+  std::printf(", path length %.3f m\n", o.path);
+  const auto row = [](const char* name, const eval::ErrorStats& s) {
+    std::printf("%-14s n %6zu  rmse %.6f  mean %.6f  median %.6f  std %.6f  min %.6f  max %.6f\n", name, s.n, s.rmse,
+                s.mean, s.median, s.std, s.min, s.max);
+  };
+  row("ATE (m)", o.ate.stats);
+  if (o.path > 0) std::printf("ATE rmse / path length: %.3f %%\n", 100.0 * o.ate.stats.rmse / o.path);
+  for (const auto& [d, s] : o.rpes) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "RPE %gm (m)", d);
+    row(name, s);
+  }
+}
+
+int runEval(const EvalArgs& a) {
+  EvalOutcome o;
+  if (!eval::parseAlignMode(a.align, o.mode))
     throw CLI::ValidationError("--align", "expected se3|sim3|posyaw|none, got '" + a.align + "'");
   const auto deltas = parseDeltas(a.rpe);
   const auto ref = readReference(a.gt);
   const auto est = io::readTrajectory(a.est);
-  const TimeNs max_dt = fromSeconds(a.max_dt);
-  eval::AteResult ate;
+  o.ref_poses = ref.size();
+  o.est_poses = est.size();
   try {
-    ate = eval::computeAte(ref, est, mode, max_dt);
+    o.ate = eval::computeAte(ref, est, o.mode, fromSeconds(a.max_dt));
   } catch (const std::invalid_argument& e) {
     throw InputError(a.est, std::string(e.what()) + " (max dt " + std::to_string(a.max_dt) + " s)");
   }
   // Associated and aligned copies for RPE (pairs are chosen on the aligned estimate, as evo does).
   std::vector<StampedPose> ref_a, est_a;
-  for (const auto& [i, j] : ate.pairs) {
+  for (const auto& [i, j] : o.ate.pairs) {
     ref_a.push_back(ref[i]);
     StampedPose p = est[j];
-    p.p_w_b = ate.alignment.apply(p.p_w_b);
-    p.q_w_b = Eigen::Quaterniond(ate.alignment.R * p.q_w_b.toRotationMatrix());
+    p.p_w_b = o.ate.alignment.apply(p.p_w_b);
+    p.q_w_b = Eigen::Quaterniond(o.ate.alignment.R * p.q_w_b.toRotationMatrix());
     est_a.push_back(p);
   }
-  std::vector<std::pair<double, eval::ErrorStats>> rpes;
-  for (double d : deltas) rpes.emplace_back(d, eval::computeRpe(ref_a, est_a, d));
-  const double path = eval::pathLength(ref_a);
-
-  if (a.json) {
-    nlohmann::json j = {{"reference", a.gt},
-                        {"estimate", a.est},
-                        {"align", toString(mode)},
-                        {"max_dt_s", a.max_dt},
-                        {"pairs", ate.pairs.size()},
-                        {"reference_poses", ref.size()},
-                        {"estimate_poses", est.size()},
-                        {"path_length_m", path},
-                        {"scale", ate.alignment.s},
-                        {"ate", statsJson(ate.stats)},
-                        {"rpe", nlohmann::json::array()}};
-    for (const auto& [d, s] : rpes) j["rpe"].push_back({{"delta_m", d}, {"stats", statsJson(s)}});
-    std::cout << j.dump(2) << "\n";
-    return kOk;
-  }
-  std::printf("reference: %s (%zu poses)\nestimate:  %s (%zu poses)\n", a.gt.c_str(), ref.size(), a.est.c_str(),
-              est.size());
-  std::printf("pairs: %zu (max dt %.3f s), alignment: %s", ate.pairs.size(), a.max_dt, toString(mode));
-  if (mode == eval::AlignMode::kSim3) std::printf(" (scale %.6f)", ate.alignment.s);
-  std::printf(", path length %.3f m\n", path);
-  const auto row = [](const char* name, const eval::ErrorStats& s) {
-    std::printf("%-14s n %6zu  rmse %.6f  mean %.6f  median %.6f  std %.6f  min %.6f  max %.6f\n", name, s.n, s.rmse,
-                s.mean, s.median, s.std, s.min, s.max);
-  };
-  row("ATE (m)", ate.stats);
-  if (path > 0) std::printf("ATE rmse / path length: %.3f %%\n", 100.0 * ate.stats.rmse / path);
-  for (const auto& [d, s] : rpes) {
-    char name[32];
-    std::snprintf(name, sizeof(name), "RPE %gm (m)", d);
-    row(name, s);
-  }
+  for (double d : deltas) o.rpes.emplace_back(d, eval::computeRpe(ref_a, est_a, d));
+  o.path = eval::pathLength(ref_a);
+  if (a.json)
+    printJson(a, o);
+  else
+    printText(a, o);
   return kOk;
 }
 
