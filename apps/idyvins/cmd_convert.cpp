@@ -35,6 +35,18 @@ void writeImage(const fs::path& path, const cv::Mat& image) {
   if (!cv::imwrite(path.string(), image)) throw InputError(path.string(), "cannot write image");
 }
 
+/// EuRoC's imu0/data.csv, every digit kept.
+void writeImuCsv(const fs::path& path, const std::vector<ImuSample>& imu) {
+  std::ofstream csv = openCsv(path, "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+                                    "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]");
+  char buf[512];
+  for (const auto& m : imu) {
+    std::snprintf(buf, sizeof(buf), "%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", static_cast<long long>(m.t_ns),
+                  m.gyr_b.x(), m.gyr_b.y(), m.gyr_b.z(), m.acc_b.x(), m.acc_b.y(), m.acc_b.z());
+    csv << buf;
+  }
+}
+
 int runConvert(const ConvertArgs& a) {
   if (!io::isBagFile(a.bag)) throw InputError(a.bag, "not a ROS1 bag (expected the '#ROSBAG V2.0' header)");
   std::optional<Config> config;
@@ -61,15 +73,7 @@ int runConvert(const ConvertArgs& a) {
   std::ofstream csv0 = openCsv(mav0 / "cam0" / "data.csv", "#timestamp [ns],filename");
   std::ofstream csv1;
   if (stereo) csv1 = openCsv(mav0 / "cam1" / "data.csv", "#timestamp [ns],filename");
-  std::ofstream imu_csv = openCsv(mav0 / "imu0" / "data.csv",
-                                  "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
-                                  "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]");
-  char buf[512];
-  for (const auto& m : imu) {
-    std::snprintf(buf, sizeof(buf), "%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", static_cast<long long>(m.t_ns),
-                  m.gyr_b.x(), m.gyr_b.y(), m.gyr_b.z(), m.acc_b.x(), m.acc_b.y(), m.acc_b.z());
-    imu_csv << buf;
-  }
+  writeImuCsv(mav0 / "imu0" / "data.csv", imu);
   if (!groundtruth.empty()) {
     fs::create_directories(mav0 / "state_groundtruth_estimate0");
     io::writeStateCsv((mav0 / "state_groundtruth_estimate0" / "data.csv").string(), groundtruth);
