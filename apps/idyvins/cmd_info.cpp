@@ -91,48 +91,43 @@ io::BagTopics defaultBagTopics(const std::optional<Config>& config, const std::s
   return t;
 }
 
-int runInfo(const InfoArgs& args) {
-  std::optional<Config> config;
-  if (!args.config.empty()) config = loadConfig(args.config);
-  std::optional<io::BagIndex> bag;
-  if (io::isBagFile(args.dataset))
-    bag = io::indexBag(args.dataset, defaultBagTopics(config, args.groundtruth_topic),
-                       config ? config->image_width : 0, config ? config->image_height : 0);
-  io::EurocDataset folder;
-  if (!bag) folder = io::readEurocDataset(args.dataset);
-  const io::EurocDataset& ds = bag ? bag->dataset : folder;  // no copy of a long bag's index
-  const io::DatasetSummary s = io::summarize(ds);
-  if (config && config->num_cam == 2 && !ds.stereo())
-    throw InputError(ds.root, "config asks for 2 cameras but the dataset has no cam1/");
-  std::pair<int, int> size{0, 0};
-  if (!args.skip_images)
-    size = bag ? validateBagImages(*bag, config ? config->image_width : 0, config ? config->image_height : 0)
-               : validateImages(ds, config ? config->image_width : 0, config ? config->image_height : 0);
+/// What info found, for printing.
+struct InfoOutcome {
+  const io::EurocDataset& ds;
+  const io::DatasetSummary& s;
+  const io::BagIndex* bag;  ///< null for a EuRoC folder
+  const Config* config;     ///< null without --config
+  std::pair<int, int> size;  ///< image size (0 x 0 with --skip-images)
+};
 
-  if (args.json) {
-    nlohmann::json j = {{"dataset", ds.root},
-                        {"stereo", s.stereo},
-                        {"imu", toJson(s.imu)},
-                        {"cam0", toJson(s.cam0)},
-                        {"cam1", toJson(s.cam1)},
-                        {"stereo_pairs", toJson(s.pairs)},
-                        {"unmatched_cam0", s.unmatched0},
-                        {"unmatched_cam1", s.unmatched1},
-                        {"unmatched_without_image", s.unmatched_missing_image},
-                        {"groundtruth", s.has_groundtruth ? toJson(s.groundtruth) : nullptr},
-                        {"images_checked", !args.skip_images},
-                        {"image_width", size.first},
-                        {"image_height", size.second},
-                        {"config", config ? config->path : ""}};
-    if (bag) {
-      j["format"] = "rosbag";
-      j["topics"] = nlohmann::json::array();
-      for (const auto& t : bag->all_topics) j["topics"].push_back({{"topic", t.topic}, {"type", t.type}, {"count", t.count}});
-    }
-    std::cout << j.dump(2) << "\n";
-    return kOk;
+void printJson(const InfoArgs& args, const InfoOutcome& o) {
+  const io::DatasetSummary& s = o.s;
+  nlohmann::json j = {{"dataset", o.ds.root},
+                      {"stereo", s.stereo},
+                      {"imu", toJson(s.imu)},
+                      {"cam0", toJson(s.cam0)},
+                      {"cam1", toJson(s.cam1)},
+                      {"stereo_pairs", toJson(s.pairs)},
+                      {"unmatched_cam0", s.unmatched0},
+                      {"unmatched_cam1", s.unmatched1},
+                      {"unmatched_without_image", s.unmatched_missing_image},
+                      {"groundtruth", s.has_groundtruth ? toJson(s.groundtruth) : nullptr},
+                      {"images_checked", !args.skip_images},
+                      {"image_width", o.size.first},
+                      {"image_height", o.size.second},
+                      {"config", o.config ? o.config->path : ""}};
+  if (o.bag) {
+    j["format"] = "rosbag";
+    j["topics"] = nlohmann::json::array();
+    for (const auto& t : o.bag->all_topics) j["topics"].push_back({{"topic", t.topic}, {"type", t.type}, {"count", t.count}});
   }
-  std::printf("dataset: %s (%s, %s)\n", ds.root.c_str(), bag ? "ROS1 bag" : "EuRoC ASL", s.stereo ? "stereo" : "mono");
+  std::cout << j.dump(2) << "\n";
+}
+
+void printText(const InfoArgs& args, const InfoOutcome& o) {
+  const io::DatasetSummary& s = o.s;
+  const io::BagIndex* bag = o.bag;
+  std::printf("dataset: %s (%s, %s)\n", o.ds.root.c_str(), bag ? "ROS1 bag" : "EuRoC ASL", s.stereo ? "stereo" : "mono");
   if (bag) {
     for (const auto& t : bag->all_topics)
       std::printf("  topic        %-40s %-32s %7zu messages\n", t.topic.c_str(), t.type.c_str(), t.count);
@@ -159,10 +154,34 @@ int runInfo(const InfoArgs& args) {
   if (s.imu_before_first_frame_s < 0 || s.imu_after_last_frame_s < 0)
     std::printf("  warning: IMU does not cover every frame\n");
   if (!args.skip_images)
-    std::printf("  images       %zu pairs read, all %dx%d 8-bit gray\n", ds.pairs.size(),
-                size.first, size.second);
-  if (config) std::printf("%s", describe(*config).c_str());
+    std::printf("  images       %zu pairs read, all %dx%d 8-bit gray\n", o.ds.pairs.size(),
+                o.size.first, o.size.second);
+  if (o.config) std::printf("%s", describe(*o.config).c_str());
   std::printf("valid: yes\n");
+}
+
+int runInfo(const InfoArgs& args) {
+  std::optional<Config> config;
+  if (!args.config.empty()) config = loadConfig(args.config);
+  std::optional<io::BagIndex> bag;
+  if (io::isBagFile(args.dataset))
+    bag = io::indexBag(args.dataset, defaultBagTopics(config, args.groundtruth_topic),
+                       config ? config->image_width : 0, config ? config->image_height : 0);
+  io::EurocDataset folder;
+  if (!bag) folder = io::readEurocDataset(args.dataset);
+  const io::EurocDataset& ds = bag ? bag->dataset : folder;  // no copy of a long bag's index
+  const io::DatasetSummary s = io::summarize(ds);
+  if (config && config->num_cam == 2 && !ds.stereo())
+    throw InputError(ds.root, "config asks for 2 cameras but the dataset has no cam1/");
+  std::pair<int, int> size{0, 0};
+  if (!args.skip_images)
+    size = bag ? validateBagImages(*bag, config ? config->image_width : 0, config ? config->image_height : 0)
+               : validateImages(ds, config ? config->image_width : 0, config ? config->image_height : 0);
+  const InfoOutcome outcome{ds, s, bag ? &*bag : nullptr, config ? &*config : nullptr, size};
+  if (args.json)
+    printJson(args, outcome);
+  else
+    printText(args, outcome);
   return kOk;
 }
 
