@@ -27,6 +27,50 @@ struct TrackArgs {
   bool image_stats = false;
 };
 
+/// Prints the tracking figures and returns them as JSON.
+nlohmann::json printTrackSummary(const std::string& mode, std::size_t frames, std::size_t features, std::size_t stereo,
+                                 std::size_t removed, double ms, double filter_ms,
+                                 const frontend::TrackQualitySummary& q) {
+  std::printf("%zu frames, mode %s: %.1f features/frame (%.0f%% with a stereo match), %.2f removed/frame, "
+              "tracking %.2f ms/frame, filter %.3f ms/frame\n",
+              frames, mode.c_str(), static_cast<double>(features) / frames,
+              100.0 * stereo / std::max<std::size_t>(features, 1), static_cast<double>(removed) / frames, ms / frames,
+              filter_ms / frames);
+  if (q.with_right)
+    std::printf("right matches: distance to the epipolar line median %.2f px, p99 %.2f px (calibrated extrinsics)\n",
+                q.epipolar_median_px, q.epipolar_p99_px);
+  std::printf("tracks: %zu, median length %.0f frames\n", q.tracks, q.track_length_median);
+  return {{"frames", frames},
+          {"features_per_frame", static_cast<double>(features) / frames},
+          {"right_fraction", q.right_fraction},
+          {"epipolar_median_px", q.epipolar_median_px},
+          {"epipolar_p99_px", q.epipolar_p99_px},
+          {"tracks", q.tracks},
+          {"track_length_median", q.track_length_median},
+          {"tracking_ms", ms / frames}};
+}
+
+/// Prints the left images' statistics (--image-stats) and returns them as JSON.
+nlohmann::json printImageFigures(const eval::SequenceFigures& s, double min_dist) {
+  std::printf("images (left): brightness mean %.1f, spread (std) %.1f, frame-to-frame variation %.1f %%; "
+              "gradient median %.2f, p90 %.2f gray/px, flat (< 2 gray/px) %.1f %%; %zu Shi-Tomasi corners "
+              "(quality 0.01, %g px apart)\n",
+              s.mean.mean, s.mean.stddev, 100 * s.frame_mean_variation, s.mean.gradient_median, s.mean.gradient_p90,
+              100 * s.mean.flat_fraction, s.mean.corners, min_dist);
+  std::printf("vignetting (ring mean / centre, r = 0-0.2 ... 0.8-1 of the half diagonal):");
+  for (double v : s.vignetting) std::printf(" %.3f", v);
+  std::printf("; right / left brightness %.3f\n", s.right_left_ratio);
+  return {{"brightness_mean", s.mean.mean},
+          {"brightness_std", s.mean.stddev},
+          {"frame_mean_variation", s.frame_mean_variation},
+          {"gradient_median", s.mean.gradient_median},
+          {"gradient_p90", s.mean.gradient_p90},
+          {"flat_fraction", s.mean.flat_fraction},
+          {"corners", s.mean.corners},
+          {"vignetting", s.vignetting},
+          {"right_left_ratio", s.right_left_ratio}};
+}
+
 int runTrack(const TrackArgs& a) {
   Config config = loadConfig(a.config);
   Mode mode;
@@ -69,43 +113,8 @@ int runTrack(const TrackArgs& a) {
   }
   bar.finish();
   if (frames == 0) throw InputError(a.dataset, "no stereo frames");
-  std::printf("%zu frames, mode %s: %.1f features/frame (%.0f%% with a stereo match), %.2f removed/frame, "
-              "tracking %.2f ms/frame, filter %.3f ms/frame\n",
-              frames, a.mode.c_str(), static_cast<double>(features) / frames, 100.0 * stereo / std::max<std::size_t>(features, 1),
-              static_cast<double>(removed) / frames, ms / frames, filter_ms / frames);
-  const frontend::TrackQualitySummary q = quality.summary();
-  if (q.with_right)
-    std::printf("right matches: distance to the epipolar line median %.2f px, p99 %.2f px (calibrated extrinsics)\n",
-                q.epipolar_median_px, q.epipolar_p99_px);
-  std::printf("tracks: %zu, median length %.0f frames\n", q.tracks, q.track_length_median);
-  nlohmann::json j = {{"frames", frames},
-                      {"features_per_frame", static_cast<double>(features) / frames},
-                      {"right_fraction", q.right_fraction},
-                      {"epipolar_median_px", q.epipolar_median_px},
-                      {"epipolar_p99_px", q.epipolar_p99_px},
-                      {"tracks", q.tracks},
-                      {"track_length_median", q.track_length_median},
-                      {"tracking_ms", ms / frames}};
-  if (a.image_stats) {
-    const eval::SequenceFigures s = images.figures();
-    std::printf("images (left): brightness mean %.1f, spread (std) %.1f, frame-to-frame variation %.1f %%; "
-                "gradient median %.2f, p90 %.2f gray/px, flat (< 2 gray/px) %.1f %%; %zu Shi-Tomasi corners "
-                "(quality 0.01, %g px apart)\n",
-                s.mean.mean, s.mean.stddev, 100 * s.frame_mean_variation, s.mean.gradient_median,
-                s.mean.gradient_p90, 100 * s.mean.flat_fraction, s.mean.corners, config.tracker.min_dist);
-    std::printf("vignetting (ring mean / centre, r = 0-0.2 ... 0.8-1 of the half diagonal):");
-    for (double v : s.vignetting) std::printf(" %.3f", v);
-    std::printf("; right / left brightness %.3f\n", s.right_left_ratio);
-    j["images"] = {{"brightness_mean", s.mean.mean},
-                   {"brightness_std", s.mean.stddev},
-                   {"frame_mean_variation", s.frame_mean_variation},
-                   {"gradient_median", s.mean.gradient_median},
-                   {"gradient_p90", s.mean.gradient_p90},
-                   {"flat_fraction", s.mean.flat_fraction},
-                   {"corners", s.mean.corners},
-                   {"vignetting", s.vignetting},
-                   {"right_left_ratio", s.right_left_ratio}};
-  }
+  nlohmann::json j = printTrackSummary(a.mode, frames, features, stereo, removed, ms, filter_ms, quality.summary());
+  if (a.image_stats) j["images"] = printImageFigures(images.figures(), config.tracker.min_dist);
   if (!a.json.empty()) {
     std::ofstream out(a.json);
     out << j.dump(1) << "\n";
