@@ -380,6 +380,79 @@ SceneFrame Scene::renderFrame(std::size_t k) const {
   return f;
 }
 
+namespace {
+
+/// Coverage statistics from each frame's share of cam0 pixels on moving objects.
+Coverage coverageOf(const std::vector<double>& per_frame) {
+  Coverage c;
+  double sum = 0;
+  std::size_t over = 0;
+  for (double v : per_frame) {
+    sum += v;
+    c.max = std::max(c.max, v);
+    over += v >= 0.30 ? 1 : 0;
+  }
+  c.mean = sum / static_cast<double>(per_frame.size());
+  c.frames_over_30pct = static_cast<double>(over) / static_cast<double>(per_frame.size());
+  return c;
+}
+
+/// EuRoC's cam0/cam1 data.csv: one image per stamp, named by it.
+void writeImageLists(const fs::path& mav0, const std::vector<TimeNs>& stamps) {
+  std::string csv = "#timestamp [ns],filename\n";
+  for (TimeNs t : stamps) csv += std::to_string(t) + "," + std::to_string(t) + ".png\n";
+  writeText(mav0 / "cam0" / "data.csv", csv);
+  writeText(mav0 / "cam1" / "data.csv", csv);
+}
+
+/// Renders every frame into mav0/cam{0,1}/{data,mask}/<stamp>.png on `threads` threads;
+/// returns each frame's share of cam0 pixels on moving objects.
+std::vector<double> renderImages(const Scene& scene, const std::vector<TimeNs>& stamps, const fs::path& mav0,
+                                 int threads, const std::function<void(std::size_t, std::size_t)>& progress) {
+  const std::size_t frames = stamps.size();
+  std::vector<double> coverage(frames, 0.0);
+
+  std::atomic<std::size_t> next{0}, done{0};
+  std::atomic<bool> failed{false};
+  std::mutex error_mutex;
+  std::string error;
+  auto worker = [&]() {
+    try {
+      for (std::size_t k = next++; k < frames; k = next++) {
+        const SceneFrame f = scene.renderFrame(k);
+        const std::string name = std::to_string(stamps[k]) + ".png";
+        for (int c = 0; c < 2; ++c) {
+          const RenderOutput& r = f.cam[c];
+          const fs::path cam = mav0 / ("cam" + std::to_string(c));
+          if (!cv::imwrite((cam / "data" / name).string(), r.image) ||
+              !cv::imwrite((cam / "mask" / name).string(), r.mask))
+            throw InputError((cam / "data" / name).string(), "cannot write image");
+          if (c == 0) coverage[k] = static_cast<double>(cv::countNonZero(r.mask)) / (r.mask.rows * r.mask.cols);
+        }
+        ++done;
+      }
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      if (error.empty()) error = e.what();
+      next = frames;
+      failed = true;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 0; i < std::max(1, threads); ++i) pool.emplace_back(worker);
+  while (done < frames && !failed) {
+    if (progress) progress(done, frames);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  for (auto& th : pool) th.join();
+  if (!error.empty()) throw std::runtime_error(error);
+  if (progress) progress(frames, frames);
+
+  return coverage;
+}
+
+}  // namespace
+
 SimResult simulate(const SimOptions& o, const std::string& out_dir,
                    const std::function<void(std::size_t, std::size_t)>& progress) {
   const auto start = std::chrono::steady_clock::now();
@@ -410,58 +483,10 @@ SimResult simulate(const SimOptions& o, const std::string& out_dir,
   std::vector<TimeNs> stamps(frames);
   const TimeNs td_ns = static_cast<TimeNs>(std::llround(o.td_s * 1e9));
   for (std::size_t k = 0; k < frames; ++k) stamps[k] = o.t0_ns + static_cast<TimeNs>(k) * frame_dt - td_ns;
-  std::vector<double> coverage(frames, 0.0);
+  const std::vector<double> coverage = renderImages(scene, stamps, mav0, o.threads, progress);
+  writeImageLists(mav0, stamps);
 
-  std::atomic<std::size_t> next{0}, done{0};
-  std::atomic<bool> failed{false};
-  std::mutex error_mutex;
-  std::string error;
-  auto worker = [&]() {
-    try {
-      for (std::size_t k = next++; k < frames; k = next++) {
-        const SceneFrame f = scene.renderFrame(k);
-        const std::string name = std::to_string(stamps[k]) + ".png";
-        for (int c = 0; c < 2; ++c) {
-          const RenderOutput& r = f.cam[c];
-          const fs::path cam = mav0 / ("cam" + std::to_string(c));
-          if (!cv::imwrite((cam / "data" / name).string(), r.image) ||
-              !cv::imwrite((cam / "mask" / name).string(), r.mask))
-            throw InputError((cam / "data" / name).string(), "cannot write image");
-          if (c == 0) coverage[k] = static_cast<double>(cv::countNonZero(r.mask)) / (r.mask.rows * r.mask.cols);
-        }
-        ++done;
-      }
-    } catch (const std::exception& e) {
-      std::lock_guard<std::mutex> lock(error_mutex);
-      if (error.empty()) error = e.what();
-      next = frames;
-      failed = true;
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int i = 0; i < std::max(1, o.threads); ++i) pool.emplace_back(worker);
-  while (done < frames && !failed) {
-    if (progress) progress(done, frames);
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  for (auto& th : pool) th.join();
-  if (!error.empty()) throw std::runtime_error(error);
-  if (progress) progress(frames, frames);
-
-  std::string csv = "#timestamp [ns],filename\n";
-  for (TimeNs t : stamps) csv += std::to_string(t) + "," + std::to_string(t) + ".png\n";
-  writeText(mav0 / "cam0" / "data.csv", csv);
-  writeText(mav0 / "cam1" / "data.csv", csv);
-
-  double sum = 0;
-  std::size_t over = 0;
-  for (double c : coverage) {
-    sum += c;
-    result.coverage.max = std::max(result.coverage.max, c);
-    over += c >= 0.30 ? 1 : 0;
-  }
-  result.coverage.mean = sum / frames;
-  result.coverage.frames_over_30pct = static_cast<double>(over) / frames;
+  result.coverage = coverageOf(coverage);
   writeText(root / "meta.json", metaJson(o, world, result, rig).dump(2) + "\n");
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
