@@ -250,56 +250,61 @@ void readImuTrackerSolver(const YamlFile& f, Config& c) {
   checkPositive(f, "solver_function_tolerance", c.solver.function_tolerance);
 }
 
+/// The stereo motion test's keys (`stereo_motion_*`), all optional.
+void readStereoMotion(const YamlFile& f, StereoMotionOptions& m) {
+  if (f.root["stereo_motion_test"])
+    m.enabled = getInt(f, f.root, "stereo_motion_test", "0 or 1") != 0;
+  m.chi2 = getDoubleOr(f, "stereo_motion_chi2", m.chi2);
+  m.sigma_px = getDoubleOr(f, "stereo_motion_sigma_px", m.sigma_px);
+  if (f.root["stereo_motion_strikes"]) {
+    m.strikes = getInt(f, f.root, "stereo_motion_strikes", "consecutive failures, >= 1");
+    checkPositive(f, "stereo_motion_strikes", m.strikes);
+  }
+  if (f.root["stereo_motion_anchor_frames"]) {
+    m.anchor_frames = getInt(f, f.root, "stereo_motion_anchor_frames", "frames, >= 1");
+    checkPositive(f, "stereo_motion_anchor_frames", m.anchor_frames);
+  }
+  m.drift_mps = getDoubleOr(f, "stereo_motion_drift_mps", m.drift_mps);
+  m.remove_chi2 = getDoubleOr(f, "stereo_motion_remove_chi2", m.remove_chi2);
+  if (f.root["stereo_motion_persistent_strikes"]) {
+    m.persistent_strikes =
+        getInt(f, f.root, "stereo_motion_persistent_strikes", "consecutive failures, >= 0 (0 = never)");
+    if (m.persistent_strikes < 0)
+      throw InputError(f.path, lineOf(f.root["stereo_motion_persistent_strikes"]),
+                       "key 'stereo_motion_persistent_strikes': expected consecutive failures >= 0 (0 = never), got " +
+                           std::to_string(m.persistent_strikes));
+  }
+  if (!(m.remove_chi2 >= 0))
+    throw InputError(f.path, lineOf(f.root["stereo_motion_remove_chi2"]),
+                     "key 'stereo_motion_remove_chi2': expected a chi2 >= 0 (0 = stereo_motion_chi2), got " +
+                         std::to_string(m.remove_chi2));
+  m.left_chi2 = getDoubleOr(f, "stereo_motion_left_chi2", m.left_chi2);
+  m.noise_ref = getDoubleOr(f, "stereo_motion_noise_ref", m.noise_ref);
+  m.noise_quantile = getDoubleOr(f, "stereo_motion_noise_quantile", m.noise_quantile);
+  m.min_disparity_px =
+      getDoubleOr(f, "stereo_motion_min_disparity_px", m.min_disparity_px);
+  if (!(m.min_disparity_px >= 0))
+    throw InputError(f.path, lineOf(f.root["stereo_motion_min_disparity_px"]),
+                     "key 'stereo_motion_min_disparity_px': expected pixels >= 0 (0 = off), got " +
+                         std::to_string(m.min_disparity_px));
+  if (!(m.noise_ref >= 0))
+    throw InputError(f.path, lineOf(f.root["stereo_motion_noise_ref"]),
+                     "key 'stereo_motion_noise_ref': expected a chi2 >= 0 (0 = off), got " +
+                         std::to_string(m.noise_ref));
+  if (!(m.noise_quantile > 0 && m.noise_quantile < 1))
+    throw InputError(f.path, lineOf(f.root["stereo_motion_noise_quantile"]),
+                     "key 'stereo_motion_noise_quantile': expected a quantile in (0, 1), got " +
+                         std::to_string(m.noise_quantile));
+  checkPositive(f, "stereo_motion_chi2", m.chi2);
+}
+
 /// The IDY keys (DESIGN §4), all optional.
 void readDynamic(const YamlFile& f, const std::string& path, Config& c) {
   c.dynamic.lambda_dy = getDoubleOr(f, "lambda_dy", 4.0);
   c.dynamic.lambda_dy_c = getDoubleOr(f, "lambda_dy_c", 1.0);
   if (f.root["confirm_outliers_dynamic"])
     c.dynamic.confirm_outliers = getInt(f, f.root, "confirm_outliers_dynamic", "0 or 1") != 0;
-  if (f.root["stereo_motion_test"])
-    c.dynamic.stereo.enabled = getInt(f, f.root, "stereo_motion_test", "0 or 1") != 0;
-  c.dynamic.stereo.chi2 = getDoubleOr(f, "stereo_motion_chi2", c.dynamic.stereo.chi2);
-  c.dynamic.stereo.sigma_px = getDoubleOr(f, "stereo_motion_sigma_px", c.dynamic.stereo.sigma_px);
-  if (f.root["stereo_motion_strikes"]) {
-    c.dynamic.stereo.strikes = getInt(f, f.root, "stereo_motion_strikes", "consecutive failures, >= 1");
-    checkPositive(f, "stereo_motion_strikes", c.dynamic.stereo.strikes);
-  }
-  if (f.root["stereo_motion_anchor_frames"]) {
-    c.dynamic.stereo.anchor_frames = getInt(f, f.root, "stereo_motion_anchor_frames", "frames, >= 1");
-    checkPositive(f, "stereo_motion_anchor_frames", c.dynamic.stereo.anchor_frames);
-  }
-  c.dynamic.stereo.drift_mps = getDoubleOr(f, "stereo_motion_drift_mps", c.dynamic.stereo.drift_mps);
-  c.dynamic.stereo.remove_chi2 = getDoubleOr(f, "stereo_motion_remove_chi2", c.dynamic.stereo.remove_chi2);
-  if (f.root["stereo_motion_persistent_strikes"]) {
-    c.dynamic.stereo.persistent_strikes =
-        getInt(f, f.root, "stereo_motion_persistent_strikes", "consecutive failures, >= 0 (0 = never)");
-    if (c.dynamic.stereo.persistent_strikes < 0)
-      throw InputError(f.path, lineOf(f.root["stereo_motion_persistent_strikes"]),
-                       "key 'stereo_motion_persistent_strikes': expected consecutive failures >= 0 (0 = never), got " +
-                           std::to_string(c.dynamic.stereo.persistent_strikes));
-  }
-  if (!(c.dynamic.stereo.remove_chi2 >= 0))
-    throw InputError(f.path, lineOf(f.root["stereo_motion_remove_chi2"]),
-                     "key 'stereo_motion_remove_chi2': expected a chi2 >= 0 (0 = stereo_motion_chi2), got " +
-                         std::to_string(c.dynamic.stereo.remove_chi2));
-  c.dynamic.stereo.left_chi2 = getDoubleOr(f, "stereo_motion_left_chi2", c.dynamic.stereo.left_chi2);
-  c.dynamic.stereo.noise_ref = getDoubleOr(f, "stereo_motion_noise_ref", c.dynamic.stereo.noise_ref);
-  c.dynamic.stereo.noise_quantile = getDoubleOr(f, "stereo_motion_noise_quantile", c.dynamic.stereo.noise_quantile);
-  c.dynamic.stereo.min_disparity_px =
-      getDoubleOr(f, "stereo_motion_min_disparity_px", c.dynamic.stereo.min_disparity_px);
-  if (!(c.dynamic.stereo.min_disparity_px >= 0))
-    throw InputError(f.path, lineOf(f.root["stereo_motion_min_disparity_px"]),
-                     "key 'stereo_motion_min_disparity_px': expected pixels >= 0 (0 = off), got " +
-                         std::to_string(c.dynamic.stereo.min_disparity_px));
-  if (!(c.dynamic.stereo.noise_ref >= 0))
-    throw InputError(f.path, lineOf(f.root["stereo_motion_noise_ref"]),
-                     "key 'stereo_motion_noise_ref': expected a chi2 >= 0 (0 = off), got " +
-                         std::to_string(c.dynamic.stereo.noise_ref));
-  if (!(c.dynamic.stereo.noise_quantile > 0 && c.dynamic.stereo.noise_quantile < 1))
-    throw InputError(f.path, lineOf(f.root["stereo_motion_noise_quantile"]),
-                     "key 'stereo_motion_noise_quantile': expected a quantile in (0, 1), got " +
-                         std::to_string(c.dynamic.stereo.noise_quantile));
-  checkPositive(f, "stereo_motion_chi2", c.dynamic.stereo.chi2);
+  readStereoMotion(f, c.dynamic.stereo);
   if (f.root["lost_track_test"])
     c.dynamic.lost_track_test = getInt(f, f.root, "lost_track_test", "0 or 1") != 0;
   checkPositive(f, "stereo_motion_sigma_px", c.dynamic.stereo.sigma_px);
