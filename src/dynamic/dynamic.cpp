@@ -251,37 +251,7 @@ void IdyFilter::markCandidate(frontend::Feature& f) {
   ++stats_.candidates;
 }
 
-void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<frontend::FilterItem>& items,
-                           const std::vector<std::size_t>& tracked, const std::vector<bool>& removed,
-                           const Matrix3d& R, double fx) {
-  const double sigma_p2 = std::max(0.0, ctx.prior->cov_p.trace()) / 3.0;
-  const double dt = std::max(0.0, toSeconds(ctx.t_cur_ns - ctx.t_prev_ns));
-  std::unordered_map<std::uint64_t, StereoAnchor> anchors;  // of the features seen now
-  struct Tested {
-    std::size_t item;
-    int strikes_before;
-    StereoMotionError e;
-  };
-  std::vector<Tested> tested;
-  for (std::size_t k = 0; k < tracked.size(); ++k) {
-    auto& it = items[tracked[k]];
-    if (removed[k]) continue;
-    StereoAnchor anchor;
-    int strikes_before = 0;
-    if (!nextAnchor(it, *ctx.prior, R, sigma_p2, anchor, strikes_before)) continue;
-    anchors[it.feature->id] = anchor;
-    if (!it.feature->has_right) continue;
-    ++stats_.stereo_tested;
-    // Beyond the first step the chained priors drift (velocity error × time).
-    const double drift = o_.stereo.drift_mps * (anchor.steps - 1) * dt;
-    const StereoMotionError e = stereoMotionError(anchor.xy_l, anchor.xy_r, it.feature->xy, it.feature->xy_right,
-                                                  o_.T_r_l, anchor.R, anchor.t, anchor.var_p + drift * drift, fx,
-                                                  o_.stereo.sigma_px);
-    if (!e.valid) continue;
-    it.feature->stereo_chi2 = e.chi2;
-    it.feature->stereo_depth = e.depth;
-    tested.push_back({tracked[k], strikes_before, e});
-  }
+void IdyFilter::updateNoiseScale(const std::vector<StereoTested>& tested) {
   // The frame's noise scale, from its own χ² (kept from the last frame when too few).
   if (static_cast<int>(tested.size()) >= o_.stereo.noise_min_features) {
     std::vector<double> chi2;
@@ -290,6 +260,10 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
     noise_scale_ = stereoNoiseScale(std::move(chi2), o_.stereo.noise_quantile, o_.stereo.noise_ref);
   }
   stats_.stereo_noise_scale = noise_scale_;
+}
+
+void IdyFilter::judgeStereoFailures(std::vector<frontend::FilterItem>& items, const std::vector<StereoTested>& tested,
+                                    std::unordered_map<std::uint64_t, StereoAnchor>& anchors, double fx) {
   const double baseline_px = fx * o_.T_r_l.translation().norm();
   for (const auto& t : tested) {
     auto& it = items[t.item];
@@ -316,6 +290,36 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
       markCandidate(*it.feature);
     }
   }
+}
+
+void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<frontend::FilterItem>& items,
+                           const std::vector<std::size_t>& tracked, const std::vector<bool>& removed,
+                           const Matrix3d& R, double fx) {
+  const double sigma_p2 = std::max(0.0, ctx.prior->cov_p.trace()) / 3.0;
+  const double dt = std::max(0.0, toSeconds(ctx.t_cur_ns - ctx.t_prev_ns));
+  std::unordered_map<std::uint64_t, StereoAnchor> anchors;  // of the features seen now
+  std::vector<StereoTested> tested;
+  for (std::size_t k = 0; k < tracked.size(); ++k) {
+    auto& it = items[tracked[k]];
+    if (removed[k]) continue;
+    StereoAnchor anchor;
+    int strikes_before = 0;
+    if (!nextAnchor(it, *ctx.prior, R, sigma_p2, anchor, strikes_before)) continue;
+    anchors[it.feature->id] = anchor;
+    if (!it.feature->has_right) continue;
+    ++stats_.stereo_tested;
+    // Beyond the first step the chained priors drift (velocity error × time).
+    const double drift = o_.stereo.drift_mps * (anchor.steps - 1) * dt;
+    const StereoMotionError e = stereoMotionError(anchor.xy_l, anchor.xy_r, it.feature->xy, it.feature->xy_right,
+                                                  o_.T_r_l, anchor.R, anchor.t, anchor.var_p + drift * drift, fx,
+                                                  o_.stereo.sigma_px);
+    if (!e.valid) continue;
+    it.feature->stereo_chi2 = e.chi2;
+    it.feature->stereo_depth = e.depth;
+    tested.push_back({tracked[k], strikes_before, e});
+  }
+  updateNoiseScale(tested);
+  judgeStereoFailures(items, tested, anchors, fx);
   stereo_anchors_ = std::move(anchors);
 }
 

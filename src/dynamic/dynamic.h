@@ -148,6 +148,18 @@ class IdyFilter final : public frontend::FeatureFilter {
   bool nextAnchor(const frontend::FilterItem& it, const frontend::MotionPrior& prior, const Eigen::Matrix3d& R,
                   double sigma_p2, StereoAnchor& anchor, int& strikes_before) const;
   void markCandidate(frontend::Feature& f);
+  /// One feature the stereo motion test ran on this frame.
+  struct StereoTested {
+    std::size_t item;
+    int strikes_before;
+    StereoMotionError e;
+  };
+  /// Updates noise_scale_ from this frame's χ² (kept when too few features were tested).
+  void updateNoiseScale(const std::vector<StereoTested>& tested);
+  /// Marks or removes the features that failed the test (a first failure marks, a
+  /// repeated clear or persistent one removes); their anchors keep the failure count.
+  void judgeStereoFailures(std::vector<frontend::FilterItem>& items, const std::vector<StereoTested>& tested,
+                           std::unordered_map<std::uint64_t, StereoAnchor>& anchors, double fx);
 };
 
 }  // namespace idyvins::dynamic
