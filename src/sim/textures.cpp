@@ -125,63 +125,72 @@ void cracks(cv::Mat& f, cv::RNG& rng, int n, int count) {
 
 /// Materials of the validation suite: other generators than makeTexture's, so that a
 /// front end tuned on those meets surfaces it was not tuned on.
+/// Bricks with a few plain doors, shutters and signs.
+cv::Mat validationFacade(cv::RNG& rng, int n) {
+  cv::Mat f = fractalNoise(rng, n, 125, 18, 8, 4);
+  bricks(f, rng, n);
+  // A few doors, shutters and signs: plain dark or light panels with a frame.
+  for (int i = 0, count = rng.uniform(3, 8); i < count; ++i) {
+    const cv::Rect r(rng.uniform(0, n), rng.uniform(0, n), rng.uniform(n / 16, n / 6), rng.uniform(n / 12, n / 5));
+    cv::rectangle(f, r, cv::Scalar(rng.uniform(35, 225)), cv::FILLED);
+    cv::rectangle(f, r, cv::Scalar(rng.uniform(60, 200)), std::max(2, n / 300));
+  }
+  return f;
+}
+
+/// Asphalt: grain at every scale, aggregate speckles, worn painted lines.
+cv::Mat validationAsphalt(cv::RNG& rng, int n) {
+  cv::Mat f = fractalNoise(rng, n, 95, 30, 8, 6);
+  for (int i = 0; i < 3000; ++i)
+    cv::circle(f, cv::Point(rng.uniform(0, n), rng.uniform(0, n)), rng.uniform(1, 3), cv::Scalar(rng.uniform(40, 200)),
+               cv::FILLED);
+  for (int i = 0; i < 6; ++i) {
+    const int x = rng.uniform(0, n);
+    cv::line(f, {x, 0}, {x + rng.uniform(-n / 8, n / 8), n}, cv::Scalar(rng.uniform(170, 220)), std::max(3, n / 80));
+  }
+  return f;
+}
+
+/// Paint with few features: smooth shading, panel seams, a few badges and windows.
+cv::Mat validationVehicle(cv::RNG& rng, int n) {
+  cv::Mat f = background(rng, n, rng.uniform(60, 190), 25, 3);
+  for (int i = 0; i < 14; ++i) {
+    const int a = rng.uniform(0, n);
+    if (i % 2)
+      cv::line(f, {a, 0}, {a, n}, cv::Scalar(rng.uniform(20, 80)), 2, cv::LINE_AA);
+    else
+      cv::line(f, {0, a}, {n, a}, cv::Scalar(rng.uniform(20, 80)), 2, cv::LINE_AA);
+  }
+  for (int i = 0; i < 10; ++i)
+    cv::ellipse(f, cv::Point(rng.uniform(0, n), rng.uniform(0, n)),
+                cv::Size(rng.uniform(n / 64, n / 16), rng.uniform(n / 64, n / 24)), rng.uniform(0, 180), 0, 360,
+                cv::Scalar(rng.uniform(10, 245)), cv::FILLED, cv::LINE_AA);
+  for (int i = 0; i < 4; ++i)
+    cv::rectangle(f, cv::Rect(rng.uniform(0, n), rng.uniform(0, n), rng.uniform(n / 10, n / 4), n / 10),
+                  cv::Scalar(rng.uniform(15, 60)), cv::FILLED);
+  return f;
+}
+
+/// Stained, cracked concrete.
+cv::Mat validationConcrete(cv::RNG& rng, int n) {
+  cv::Mat f = fractalNoise(rng, n, 135, 22, 6, 6);
+  for (int i = 0; i < 40; ++i)  // stains
+    cv::circle(f, cv::Point(rng.uniform(0, n), rng.uniform(0, n)), rng.uniform(n / 60, n / 12),
+               cv::Scalar(rng.uniform(90, 170)), cv::FILLED, cv::LINE_AA);
+  cv::GaussianBlur(f, f, cv::Size(0, 0), 2.0);
+  f += fractalNoise(rng, n, 0, 10, 64, 3);
+  cracks(f, rng, n, 60);
+  return f;
+}
+
 cv::Mat makeValidationTexture(TextureKind kind, cv::RNG& rng, int n) {
   cv::Mat f;
   switch (kind) {
-    case TextureKind::kFacade: {
-      f = fractalNoise(rng, n, 125, 18, 8, 4);
-      bricks(f, rng, n);
-      // A few doors, shutters and signs: plain dark or light panels with a frame.
-      for (int i = 0, count = rng.uniform(3, 8); i < count; ++i) {
-        const cv::Rect r(rng.uniform(0, n), rng.uniform(0, n), rng.uniform(n / 16, n / 6), rng.uniform(n / 12, n / 5));
-        cv::rectangle(f, r, cv::Scalar(rng.uniform(35, 225)), cv::FILLED);
-        cv::rectangle(f, r, cv::Scalar(rng.uniform(60, 200)), std::max(2, n / 300));
-      }
-      break;
-    }
-    case TextureKind::kGround: {
-      f = fractalNoise(rng, n, 95, 30, 8, 6);  // asphalt: grain at every scale
-      for (int i = 0; i < 3000; ++i)           // aggregate speckles
-        cv::circle(f, cv::Point(rng.uniform(0, n), rng.uniform(0, n)), rng.uniform(1, 3),
-                   cv::Scalar(rng.uniform(40, 200)), cv::FILLED);
-      for (int i = 0; i < 6; ++i) {  // worn painted lines
-        const int x = rng.uniform(0, n);
-        cv::line(f, {x, 0}, {x + rng.uniform(-n / 8, n / 8), n}, cv::Scalar(rng.uniform(170, 220)),
-                 std::max(3, n / 80));
-      }
-      break;
-    }
-    case TextureKind::kVehicle: {
-      // Paint with few features: smooth shading, panel seams, a few badges and windows.
-      f = background(rng, n, rng.uniform(60, 190), 25, 3);
-      for (int i = 0; i < 14; ++i) {
-        const int a = rng.uniform(0, n);
-        if (i % 2)
-          cv::line(f, {a, 0}, {a, n}, cv::Scalar(rng.uniform(20, 80)), 2, cv::LINE_AA);
-        else
-          cv::line(f, {0, a}, {n, a}, cv::Scalar(rng.uniform(20, 80)), 2, cv::LINE_AA);
-      }
-      for (int i = 0; i < 10; ++i)
-        cv::ellipse(f, cv::Point(rng.uniform(0, n), rng.uniform(0, n)),
-                    cv::Size(rng.uniform(n / 64, n / 16), rng.uniform(n / 64, n / 24)), rng.uniform(0, 180), 0, 360,
-                    cv::Scalar(rng.uniform(10, 245)), cv::FILLED, cv::LINE_AA);
-      for (int i = 0; i < 4; ++i)
-        cv::rectangle(f, cv::Rect(rng.uniform(0, n), rng.uniform(0, n), rng.uniform(n / 10, n / 4), n / 10),
-                      cv::Scalar(rng.uniform(15, 60)), cv::FILLED);
-      break;
-    }
-    case TextureKind::kConcrete: {
-      f = fractalNoise(rng, n, 135, 22, 6, 6);
-      for (int i = 0; i < 40; ++i)  // stains
-        cv::circle(f, cv::Point(rng.uniform(0, n), rng.uniform(0, n)), rng.uniform(n / 60, n / 12),
-                   cv::Scalar(rng.uniform(90, 170)), cv::FILLED, cv::LINE_AA);
-      cv::GaussianBlur(f, f, cv::Size(0, 0), 2.0);
-      f += fractalNoise(rng, n, 0, 10, 64, 3);
-      cracks(f, rng, n, 60);
-      break;
-    }
-    case TextureKind::kChecker:
-      return makeTexture(kind, rng, n);
+    case TextureKind::kFacade: f = validationFacade(rng, n); break;
+    case TextureKind::kGround: f = validationAsphalt(rng, n); break;
+    case TextureKind::kVehicle: f = validationVehicle(rng, n); break;
+    case TextureKind::kConcrete: f = validationConcrete(rng, n); break;
+    case TextureKind::kChecker: return makeTexture(kind, rng, n);
   }
   cv::GaussianBlur(f, f, cv::Size(0, 0), 1.0);
   cv::Mat out;
