@@ -109,6 +109,31 @@ bool wellConditioned(const Eigen::LDLT<Eigen::Matrix<double, 6, 6>>& ldlt) {
 
 }  // namespace
 
+namespace {
+
+/// The template's steepest-descent images (6 per kept pixel, affine warp, gradients of the
+/// (2 half + 3)² samples `big` scaled by `scale`) into `sd`; returns their Gauss-Newton Hessian.
+Eigen::Matrix<double, 6, 6> steepestDescent(const std::vector<float>& big, const std::vector<unsigned char>& inside,
+                                            int half, double scale, std::vector<float>& sd) {
+  const int n = 2 * half + 1, m = n + 2;
+  sd.assign(6 * static_cast<std::size_t>(n) * n, 0.f);
+  Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) {
+      if (!inside[r * n + c]) continue;
+      const double gx = 0.5 * scale * (big[(r + 1) * m + c + 2] - big[(r + 1) * m + c]);
+      const double gy = 0.5 * scale * (big[(r + 2) * m + c + 1] - big[r * m + c + 1]);
+      const double x = c - half, y = r - half;
+      Eigen::Matrix<double, 6, 1> s;
+      s << gx * x, gx * y, gy * x, gy * y, gx, gy;
+      H.noalias() += s * s.transpose();
+      for (int k = 0; k < 6; ++k) sd[6 * (r * n + c) + k] = static_cast<float>(s[k]);
+    }
+  return H;
+}
+
+}  // namespace
+
 PatchTemplate makePatchTemplate(const cv::Mat& image, const Eigen::Vector2d& uv_center, int half, double min_inside) {
   PatchTemplate tmpl;
   tmpl.half = half;
@@ -158,19 +183,7 @@ PatchTemplate makePatchTemplate(const cv::Mat& image, const Eigen::Vector2d& uv_
       tmpl.values[k] = inside[k] ? static_cast<float>((tmpl.values[k] - mean) / std::sqrt(ss)) : 0.f;
   }
   const double scale = 1.0 / std::sqrt(ss);
-  tmpl.sd.assign(6 * count, 0.f);
-  Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
-  for (int r = 0; r < n; ++r)
-    for (int c = 0; c < n; ++c) {
-      if (!inside[r * n + c]) continue;
-      const double gx = 0.5 * scale * (big[(r + 1) * m + c + 2] - big[(r + 1) * m + c]);
-      const double gy = 0.5 * scale * (big[(r + 2) * m + c + 1] - big[r * m + c + 1]);
-      const double x = c - half, y = r - half;
-      Eigen::Matrix<double, 6, 1> s;
-      s << gx * x, gx * y, gy * x, gy * y, gx, gy;
-      H.noalias() += s * s.transpose();
-      for (int k = 0; k < 6; ++k) tmpl.sd[6 * (r * n + c) + k] = static_cast<float>(s[k]);
-    }
+  const Eigen::Matrix<double, 6, 6> H = steepestDescent(big, inside, half, scale, tmpl.sd);
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
   if (!wellConditioned(ldlt)) return tmpl;
   tmpl.H_inv = ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity());
