@@ -40,10 +40,6 @@ struct LandmarkFactor {
   int frame;  ///< -1 for the one-frame stereo factor
 };
 
-TimedObservation timed(const Eigen::Vector2d& xy, const Eigen::Vector2d& velocity, double td_s) {
-  return {xy, velocity, td_s};
-}
-
 /// How a landmark's factors treat the time offset.
 struct TdUse {
   bool block = false;  ///< each factor carries the td block
@@ -60,7 +56,7 @@ std::vector<LandmarkFactor> landmarkFactors(const Landmark& lm, const Rig& rig, 
   auto at = [&](const TimedObservation& o) -> Vector2d {
     return td.moved_to ? Vector2d(o.xy - (*td.moved_to - o.td_obs) * o.velocity) : o.xy;
   };
-  const TimedObservation a_left = timed(a.xy, a.velocity, a.td_s);
+  const TimedObservation a_left = TimedObservation{a.xy, a.velocity, a.td_s};
   auto twoFrame = [&](const TimedObservation& target, const Extrinsic& cam, const ProjectionWeight& w)
       -> std::shared_ptr<ceres::CostFunction> {
     if (td.block) return std::make_shared<ProjectionTwoFrameTd>(a_left, target, rig.T_b_c0, cam, w);
@@ -72,9 +68,9 @@ std::vector<LandmarkFactor> landmarkFactors(const Landmark& lm, const Rig& rig, 
     ProjectionWeight w = w_static;  // stereo factors within one frame keep the static weight
     const auto it = scale_of_frame.find(frame);
     if (it != scale_of_frame.end()) w.info_scale = it->second;
-    if (k > 0) out.push_back({twoFrame(timed(o.xy, o.velocity, o.td_s), rig.T_b_c0, w), frame});
+    if (k > 0) out.push_back({twoFrame(TimedObservation{o.xy, o.velocity, o.td_s}, rig.T_b_c0, w), frame});
     if (!rig.stereo || !o.has_right) continue;
-    const TimedObservation right = timed(o.xy_right, o.velocity_right, o.td_s);
+    const TimedObservation right = TimedObservation{o.xy_right, o.velocity_right, o.td_s};
     if (k > 0) {
       out.push_back({twoFrame(right, rig.T_b_c1, w), frame});
     } else if (td.block) {

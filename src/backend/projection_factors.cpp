@@ -44,23 +44,27 @@ ProjectionTwoFrame::ProjectionTwoFrame(const Vector2d& xy_i, const Vector2d& xy_
     : pts_i_(homogeneous(xy_i)), pts_j_(homogeneous(xy_j)), ex0_(T_b_c0), exb_(T_b_cb),
       weight_(weight) {}
 
-bool ProjectionTwoFrame::Evaluate(double const* const* parameters, double* residuals,
-                                  double** jacobians) const {
+namespace {
+
+/// ProjectionTwoFrame's residual and Jacobians for homogeneous observations pts_i, pts_j.
+bool evaluateTwoFrame(const Vector3d& pts_i, const Vector3d& pts_j, const Extrinsic& ex0, const Extrinsic& exb,
+                      const ProjectionWeight& weight, double const* const* parameters, double* residuals,
+                      double** jacobians) {
   const Eigen::Map<const Vector3d> Pi(parameters[0]);
   const Quaterniond Qi = Eigen::Map<const Quaterniond>(parameters[0] + 3).normalized();
   const Eigen::Map<const Vector3d> Pj(parameters[1]);
   const Quaterniond Qj = Eigen::Map<const Quaterniond>(parameters[1] + 3).normalized();
   const double inv_dep = parameters[2][0];
-  const Extrinsic& a = ex0_;
-  const Extrinsic& b = exb_;
-  const Vector3d pts_cam_i = pts_i_ / inv_dep;
+  const Extrinsic& a = ex0;
+  const Extrinsic& b = exb;
+  const Vector3d pts_cam_i = pts_i / inv_dep;
   const Vector3d pts_imu_i = a.q_b_c * pts_cam_i + a.t_b_c;
   const Vector3d pts_w = Qi * pts_imu_i + Pi;
   const Vector3d pts_imu_j = Qj.conjugate() * (pts_w - Pj);
   const Vector3d pts_cam_j = b.q_b_c.conjugate() * (pts_imu_j - b.t_b_c);
-  const double sqrt_info = weight_.sqrtInfo();
+  const double sqrt_info = weight.sqrtInfo();
   Eigen::Map<Vector2d> r(residuals);
-  r = sqrt_info * (pts_cam_j.head<2>() / pts_cam_j.z() - pts_j_.head<2>());
+  r = sqrt_info * (pts_cam_j.head<2>() / pts_cam_j.z() - pts_j.head<2>());
   if (!jacobians) return true;
 
   const Matrix3d Ri = Qi.toRotationMatrix(), Rj = Qj.toRotationMatrix();
@@ -85,9 +89,16 @@ bool ProjectionTwoFrame::Evaluate(double const* const* parameters, double* resid
   }
   if (jacobians[2]) {
     Eigen::Map<Vector2d> J(jacobians[2]);
-    J = reduce * Rb_cb_T * Rj.transpose() * Ri * Rca_b * pts_i_ * (-1.0 / (inv_dep * inv_dep));
+    J = reduce * Rb_cb_T * Rj.transpose() * Ri * Rca_b * pts_i * (-1.0 / (inv_dep * inv_dep));
   }
   return true;
+}
+
+}  // namespace
+
+bool ProjectionTwoFrame::Evaluate(double const* const* parameters, double* residuals,
+                                  double** jacobians) const {
+  return evaluateTwoFrame(pts_i_, pts_j_, ex0_, exb_, weight_, parameters, residuals, jacobians);
 }
 
 
@@ -97,20 +108,31 @@ ProjectionOneFrameTwoCam::ProjectionOneFrameTwoCam(const Vector2d& xy_left, cons
     : pts_i_(homogeneous(xy_left)), pts_j_(homogeneous(xy_right)), ex0_(T_b_c0), ex1_(T_b_c1),
       weight_(weight) {}
 
-bool ProjectionOneFrameTwoCam::Evaluate(double const* const* parameters, double* residuals,
-                                        double** jacobians) const {
+namespace {
+
+/// ProjectionOneFrameTwoCam's residual and Jacobian for homogeneous observations pts_i, pts_j.
+bool evaluateOneFrameTwoCam(const Vector3d& pts_i, const Vector3d& pts_j, const Extrinsic& ex0, const Extrinsic& ex1,
+                            const ProjectionWeight& weight, double const* const* parameters, double* residuals,
+                            double** jacobians) {
   const double inv_dep = parameters[0][0];
-  const Vector3d pts_imu = ex0_.q_b_c * (pts_i_ / inv_dep) + ex0_.t_b_c;
-  const Vector3d pts_cam_j = ex1_.q_b_c.conjugate() * (pts_imu - ex1_.t_b_c);
-  const double sqrt_info = weight_.sqrtInfo();
+  const Vector3d pts_imu = ex0.q_b_c * (pts_i / inv_dep) + ex0.t_b_c;
+  const Vector3d pts_cam_j = ex1.q_b_c.conjugate() * (pts_imu - ex1.t_b_c);
+  const double sqrt_info = weight.sqrtInfo();
   Eigen::Map<Vector2d> r(residuals);
-  r = sqrt_info * (pts_cam_j.head<2>() / pts_cam_j.z() - pts_j_.head<2>());
+  r = sqrt_info * (pts_cam_j.head<2>() / pts_cam_j.z() - pts_j.head<2>());
   if (jacobians && jacobians[0]) {
     Eigen::Map<Vector2d> J(jacobians[0]);
-    J = reduceJacobian(pts_cam_j, sqrt_info) * ex1_.q_b_c.conjugate().toRotationMatrix() *
-        ex0_.q_b_c.toRotationMatrix() * pts_i_ * (-1.0 / (inv_dep * inv_dep));
+    J = reduceJacobian(pts_cam_j, sqrt_info) * ex1.q_b_c.conjugate().toRotationMatrix() *
+        ex0.q_b_c.toRotationMatrix() * pts_i * (-1.0 / (inv_dep * inv_dep));
   }
   return true;
+}
+
+}  // namespace
+
+bool ProjectionOneFrameTwoCam::Evaluate(double const* const* parameters, double* residuals,
+                                        double** jacobians) const {
+  return evaluateOneFrameTwoCam(pts_i_, pts_j_, ex0_, ex1_, weight_, parameters, residuals, jacobians);
 }
 
 namespace {
@@ -133,10 +155,9 @@ bool ProjectionTwoFrameTd::Evaluate(double const* const* parameters, double* res
                                     double** jacobians) const {
   const double td = parameters[3][0];
   const Vector3d pts_i = atOffset(i_, td), pts_j = atOffset(j_, td);
-  // The residual and the pose and depth Jacobians are those of the fixed-offset factor at
-  // the moved observations.
-  const ProjectionTwoFrame fixed(pts_i.head<2>(), pts_j.head<2>(), ex0_, exb_, weight_);
-  if (!fixed.Evaluate(parameters, residuals, jacobians)) return false;
+  // The residual and the pose and depth Jacobians are the fixed-offset factor's at the moved
+  // observations (no factor object built per evaluation: this runs in the solver loop).
+  if (!evaluateTwoFrame(pts_i, pts_j, ex0_, exb_, weight_, parameters, residuals, jacobians)) return false;
   if (!jacobians || !jacobians[3]) return true;
   const Eigen::Map<const Vector3d> Pi(parameters[0]);
   const Quaterniond Qi = Eigen::Map<const Quaterniond>(parameters[0] + 3).normalized();
@@ -162,8 +183,7 @@ bool ProjectionOneFrameTwoCamTd::Evaluate(double const* const* parameters, doubl
                                           double** jacobians) const {
   const double td = parameters[1][0];
   const Vector3d pts_i = atOffset(left_, td), pts_j = atOffset(right_, td);
-  const ProjectionOneFrameTwoCam fixed(pts_i.head<2>(), pts_j.head<2>(), ex0_, ex1_, weight_);
-  if (!fixed.Evaluate(parameters, residuals, jacobians)) return false;
+  if (!evaluateOneFrameTwoCam(pts_i, pts_j, ex0_, ex1_, weight_, parameters, residuals, jacobians)) return false;
   if (!jacobians || !jacobians[1]) return true;
   const double inv_dep = parameters[0][0];
   const double sqrt_info = weight_.sqrtInfo();
