@@ -42,7 +42,7 @@ void trackerBench(benchmark::State& state, const std::string& scene, sim::Level 
   const Config rig = sim::rigConfig(o);
   std::vector<double> ms;
   for (auto _ : state) {
-    frontend::FeatureTracker tracker(rig);
+    frontend::FeatureTracker tracker(rig.rig(), rig.tracker);
     for (const auto& f : frames) {
       const frontend::FeatureFrame out = tracker.track(f, frontend::MotionPrior{}, nullptr);
       ms.push_back(out.tracking_ms);

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <algorithm>
 #include <regex>
 
 #include "core/error.h"
@@ -39,11 +40,11 @@ TEST(Config, ReadsViodePublishedCalibration) {
   EXPECT_DOUBLE_EQ(c.imu.g_norm, 9.81007);
   EXPECT_EQ(c.tracker.max_cnt, 120);
   EXPECT_TRUE(c.tracker.flow_back);
-  EXPECT_EQ(c.solver.max_num_iterations, 8);
+  EXPECT_EQ(c.estimator.max_num_iterations, 8);
   // IDY keys are absent in VIODE's file: defaults apply.
-  EXPECT_EQ(c.dynamic.mode, Mode::kIdy);
-  EXPECT_DOUBLE_EQ(c.dynamic.lambda_dy, 4.0);
-  EXPECT_DOUBLE_EQ(c.dynamic.lambda_dy_c, 1.0);
+  EXPECT_EQ(c.mode, Mode::kIdy);
+  EXPECT_DOUBLE_EQ(c.idy.lambda_dy, 4.0);
+  EXPECT_DOUBLE_EQ(c.idy.lambda_dy_c, 1.0);
 }
 
 TEST(Config, ShippedConfigsLoad) {
@@ -81,10 +82,10 @@ void expectSameParameters(const Config& a, const Config& b) {
     return std::regex_replace(d, std::regex("cam[01]_calib: [^ ]+"), "camX_calib");
   };
   EXPECT_EQ(keys(a), keys(b));
-  EXPECT_EQ(a.estimate_td, b.estimate_td);
-  EXPECT_EQ(a.td_s, b.td_s);
+  EXPECT_EQ(a.estimator.estimate_td, b.estimator.estimate_td);
+  EXPECT_EQ(a.estimator.td_s, b.estimator.td_s);
   EXPECT_EQ(a.imu.acc_n, b.imu.acc_n);
-  EXPECT_EQ(a.dynamic.stereo.min_disparity_px, b.dynamic.stereo.min_disparity_px);
+  EXPECT_EQ(a.idy.stereo.min_disparity_px, b.idy.stereo.min_disparity_px);
 }
 
 TEST(Config, SaveThenLoadGivesTheSameParametersForEveryKnownConfig) {
@@ -101,18 +102,41 @@ TEST(Config, SaveThenLoadGivesTheSameParametersForEveryKnownConfig) {
   }
 }
 
+/// Moves every numeric and 0/1 key to another valid value.
+class MoveAwayFromDefaults final : public ParamVisitor {
+ public:
+  void section(const char*) override {}
+  void param(const ParamKey& k, double& v) override {
+    switch (k.rule) {
+      case ParamRule::kOpenUnit: v = v == 0.5 ? 0.3 : 0.5; break;
+      case ParamRule::kFraction: v = v == 0.5 ? 0.7 : 0.5; break;
+      case ParamRule::kCorrelation: v = v == 0.3 ? 0.4 : 0.3; break;
+      default: v += 1.5;
+    }
+  }
+  void param(const ParamKey&, int& v) override { v += 1; }
+  void param(const ParamKey&, bool& v) override { v = !v; }
+  void param(const ParamKey&, std::string&) override {}
+};
+
+/// The names of every declared key.
+class KeyNames final : public ParamVisitor {
+ public:
+  void section(const char*) override {}
+  void param(const ParamKey& k, double&) override { names.push_back(k.name); }
+  void param(const ParamKey& k, int&) override { names.push_back(k.name); }
+  void param(const ParamKey& k, bool&) override { names.push_back(k.name); }
+  void param(const ParamKey& k, std::string&) override { names.push_back(k.name); }
+  std::vector<std::string> names;
+};
+
 TEST(Config, EveryKeyLoadReadsIsPrintedAndSaved) {
   test::TempDir dir;
-  // A config with every optional key set away from its default.
+  // A config with every key set away from its default.
   Config c = loadConfig(configPath("viode/viode_stereo_imu_config.yaml"));
-  c.estimate_td = true;
-  c.td_s = 0.0123;
-  c.tracker.equalize = true;
-  c.tracker.stereo_refine = true;
-  c.solver.time_limited = true;
-  c.dynamic.stereo.remove_chi2 = 80;
-  c.dynamic.stereo.min_disparity_px = 0.5;
-  c.dynamic.lost_track_test = false;
+  MoveAwayFromDefaults away;
+  declareParams(away, c);
+  c.mode = Mode::kIdyBa;
   c.groundtruth_topic = "/odometry";
   c.segmentation_topic = "/cam0/segmentation";
   c.segmentation_rgb_ids = configPath("viode/rgb_ids.txt");
@@ -121,12 +145,36 @@ TEST(Config, EveryKeyLoadReadsIsPrintedAndSaved) {
   std::vector<std::string> read;
   const Config loaded = loadConfig(dir / "all.yaml", &read);
   expectSameParameters(c, loaded);
-  EXPECT_GE(read.size(), 50u);
+  EXPECT_NE(describe(loaded), describe(loadConfig(configPath("viode/viode_stereo_imu_config.yaml"))));
+  EXPECT_EQ(loaded.tracker.klt_window, frontend::TrackerParams{}.klt_window + 1);  // a value read, not a default
+  EXPECT_EQ(loaded.estimator.sigma_px, backend::EstimatorOptions{}.sigma_px + 1.5);
+  EXPECT_EQ(loaded.idy.stereo.noise_quantile, 0.5);
+  KeyNames declared;
+  declareParams(declared, c);
+  EXPECT_GE(declared.names.size(), 65u);
   const std::string listing = describe(loaded), file = test::readFile(dir / "all.yaml");
+  for (const std::string& key : declared.names) {
+    EXPECT_NE(std::find(read.begin(), read.end(), key), read.end()) << key << " is declared but not read";
+    EXPECT_NE(listing.find("  " + key + ":"), std::string::npos) << key << " is declared but not printed";
+    EXPECT_NE(file.find("\n" + key + ":"), std::string::npos) << key << " is declared but not saved";
+  }
   for (const std::string& key : read) {
     EXPECT_NE(listing.find(key + ":"), std::string::npos) << key << " is read but not printed";
     EXPECT_NE(file.find(key + ":"), std::string::npos) << key << " is read but not saved";
   }
+}
+
+TEST(Config, DocsListEveryKeyWithItsDefault) {
+  // docs/cli.md carries keyTable() verbatim: every key, its default and unit, as the code
+  // declares them. On a difference the table to paste is written beside the test binary.
+  const std::string table = keyTable();
+  const std::string docs = readFile(std::string(IDYVINS_SOURCE_DIR) + "/docs/cli.md");
+  if (docs.find(table) == std::string::npos) {
+    writeFile((std::filesystem::current_path() / "config_keys.md").string(), table);
+    ADD_FAILURE() << "docs/cli.md does not hold the key table; the current one is in build/tests/config_keys.md";
+  }
+  EXPECT_NE(table.find("| `lambda_dy` | 4 | px^2"), std::string::npos);
+  EXPECT_NE(table.find("| `max_cnt` | required |"), std::string::npos);
 }
 
 TEST(Config, EurocConfigMatchesTheDatasetsOwnCalibration) {
@@ -178,30 +226,30 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
   EXPECT_EQ(c.num_cam, 1);
   EXPECT_DOUBLE_EQ(c.cams[0].dist[0], 0.1);
   EXPECT_DOUBLE_EQ(c.T_b_c[0].translation().x(), 0.1);
-  EXPECT_EQ(c.dynamic.mode, Mode::kRansac);
-  EXPECT_DOUBLE_EQ(c.dynamic.lambda_dy, 5.0);
-  EXPECT_TRUE(c.dynamic.confirm_outliers);  // default
+  EXPECT_EQ(c.mode, Mode::kRansac);
+  EXPECT_DOUBLE_EQ(c.idy.lambda_dy, 5.0);
+  EXPECT_TRUE(c.idy.confirm_outliers);  // default
   EXPECT_FALSE(loadConfig(writeConfig(dir, std::string(kConfig) + "confirm_outliers_dynamic: 0\n", kCamera))
-                   .dynamic.confirm_outliers);
-  EXPECT_TRUE(c.dynamic.lost_track_test);  // default
+                   .idy.confirm_outliers);
+  EXPECT_TRUE(c.idy.lost_track_test);  // default
   EXPECT_FALSE(loadConfig(writeConfig(dir, std::string(kConfig) + "lost_track_test: 0\n", kCamera))
-                   .dynamic.lost_track_test);
+                   .idy.lost_track_test);
   expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "lost_track_test: yes\n", kCamera)); },
               "lost_track_test");
-  EXPECT_FALSE(c.estimate_td);
-  EXPECT_DOUBLE_EQ(c.td_s, 0.0);
-  EXPECT_TRUE(c.dynamic.stereo.enabled);  // defaults of the stereo motion test
-  EXPECT_DOUBLE_EQ(c.dynamic.stereo.chi2, 18.47);
-  EXPECT_DOUBLE_EQ(c.dynamic.stereo.sigma_px, 0.25);
-  EXPECT_EQ(c.dynamic.stereo.strikes, 2);
-  EXPECT_EQ(c.dynamic.stereo.anchor_frames, 10);
-  EXPECT_DOUBLE_EQ(c.dynamic.stereo.drift_mps, 0.02);
-  EXPECT_DOUBLE_EQ(c.dynamic.stereo.remove_chi2, 0.0);
-  EXPECT_EQ(c.dynamic.stereo.persistent_strikes, 3);
-  EXPECT_DOUBLE_EQ(c.dynamic.stereo.left_chi2, 5.99);
-  EXPECT_DOUBLE_EQ(c.dynamic.stereo.noise_ref, 0.1);
-  EXPECT_DOUBLE_EQ(c.dynamic.stereo.noise_quantile, 0.25);
-  EXPECT_DOUBLE_EQ(c.dynamic.stereo.min_disparity_px, 0.0);
+  EXPECT_FALSE(c.estimator.estimate_td);
+  EXPECT_DOUBLE_EQ(c.estimator.td_s, 0.0);
+  EXPECT_TRUE(c.idy.stereo.enabled);  // defaults of the stereo motion test
+  EXPECT_DOUBLE_EQ(c.idy.stereo.chi2, 18.47);
+  EXPECT_DOUBLE_EQ(c.idy.stereo.sigma_px, 0.25);
+  EXPECT_EQ(c.idy.stereo.strikes, 2);
+  EXPECT_EQ(c.idy.stereo.anchor_frames, 10);
+  EXPECT_DOUBLE_EQ(c.idy.stereo.drift_mps, 0.02);
+  EXPECT_DOUBLE_EQ(c.idy.stereo.remove_chi2, 0.0);
+  EXPECT_EQ(c.idy.stereo.persistent_strikes, 3);
+  EXPECT_DOUBLE_EQ(c.idy.stereo.left_chi2, 5.99);
+  EXPECT_DOUBLE_EQ(c.idy.stereo.noise_ref, 0.1);
+  EXPECT_DOUBLE_EQ(c.idy.stereo.noise_quantile, 0.25);
+  EXPECT_DOUBLE_EQ(c.idy.stereo.min_disparity_px, 0.0);
   const Config s = loadConfig(writeConfig(
       dir,
       std::string(kConfig) +
@@ -210,18 +258,18 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
           "stereo_motion_noise_ref: 0\nstereo_motion_noise_quantile: 0.5\nstereo_motion_min_disparity_px: 1.5\n"
           "stereo_motion_remove_chi2: 0\nstereo_motion_persistent_strikes: 0\n",
       kCamera));
-  EXPECT_FALSE(s.dynamic.stereo.enabled);
-  EXPECT_DOUBLE_EQ(s.dynamic.stereo.chi2, 13.3);
-  EXPECT_DOUBLE_EQ(s.dynamic.stereo.sigma_px, 0.4);
-  EXPECT_EQ(s.dynamic.stereo.strikes, 1);
-  EXPECT_EQ(s.dynamic.stereo.anchor_frames, 1);
-  EXPECT_DOUBLE_EQ(s.dynamic.stereo.drift_mps, 0.1);
-  EXPECT_DOUBLE_EQ(s.dynamic.stereo.left_chi2, 0.0);
-  EXPECT_DOUBLE_EQ(s.dynamic.stereo.noise_ref, 0.0);
-  EXPECT_DOUBLE_EQ(s.dynamic.stereo.noise_quantile, 0.5);
-  EXPECT_DOUBLE_EQ(s.dynamic.stereo.min_disparity_px, 1.5);
-  EXPECT_DOUBLE_EQ(s.dynamic.stereo.remove_chi2, 0.0);
-  EXPECT_EQ(s.dynamic.stereo.persistent_strikes, 0);
+  EXPECT_FALSE(s.idy.stereo.enabled);
+  EXPECT_DOUBLE_EQ(s.idy.stereo.chi2, 13.3);
+  EXPECT_DOUBLE_EQ(s.idy.stereo.sigma_px, 0.4);
+  EXPECT_EQ(s.idy.stereo.strikes, 1);
+  EXPECT_EQ(s.idy.stereo.anchor_frames, 1);
+  EXPECT_DOUBLE_EQ(s.idy.stereo.drift_mps, 0.1);
+  EXPECT_DOUBLE_EQ(s.idy.stereo.left_chi2, 0.0);
+  EXPECT_DOUBLE_EQ(s.idy.stereo.noise_ref, 0.0);
+  EXPECT_DOUBLE_EQ(s.idy.stereo.noise_quantile, 0.5);
+  EXPECT_DOUBLE_EQ(s.idy.stereo.min_disparity_px, 1.5);
+  EXPECT_DOUBLE_EQ(s.idy.stereo.remove_chi2, 0.0);
+  EXPECT_EQ(s.idy.stereo.persistent_strikes, 0);
   expectError(
       [&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_persistent_strikes: -1\n", kCamera)); },
       "stereo_motion_persistent_strikes");
@@ -242,15 +290,15 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
 TEST(Config, SolverTimeLimitIsOffUnlessAskedFor) {
   TempDir dir;
   const Config c = loadConfig(writeConfig(dir, kConfig, kCamera));
-  EXPECT_FALSE(c.solver.time_limited) << "offline solves must not depend on the clock";
-  EXPECT_DOUBLE_EQ(c.solver.max_solver_time_s, 0.04);  // read, kept for live use
-  EXPECT_DOUBLE_EQ(c.solver.function_tolerance, 1e-4);  // measured default (Ceres' own is 1e-6)
+  EXPECT_FALSE(c.estimator.time_limited) << "offline solves must not depend on the clock";
+  EXPECT_DOUBLE_EQ(c.estimator.max_solver_time_s, 0.04);  // read, kept for live use
+  EXPECT_DOUBLE_EQ(c.estimator.function_tolerance, 1e-4);  // measured default (Ceres' own is 1e-6)
   EXPECT_DOUBLE_EQ(
       loadConfig(writeConfig(dir, std::string(kConfig) + "solver_function_tolerance: 1e-6\n", kCamera))
-          .solver.function_tolerance,
+          .estimator.function_tolerance,
       1e-6);
   const Config live = loadConfig(writeConfig(dir, std::string(kConfig) + "solver_time_limit: 1\n", kCamera));
-  EXPECT_TRUE(live.solver.time_limited);
+  EXPECT_TRUE(live.estimator.time_limited);
   EXPECT_NE(describe(live).find("applied"), std::string::npos);
   expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "solver_time_limit: yes\n", kCamera)); },
               "solver_time_limit");

@@ -252,6 +252,42 @@ frontend::MotionPrior forwardPrior(double step_m, double position_var) {
   return prior;
 }
 
+TEST(LostCornerTest, StaticPredictionFollowsThePriorWithItsTolerance) {
+  // A static point seen in stereo at 8 m, moved by a forward prior of 0.5 m: predicted
+  // where it projects now, within a tolerance of the base term plus the stereo depth
+  // interval plus the prior's position sigmas; without translation depth does not matter.
+  const auto cam = pinholeCamera();
+  const auto T_r_l = rightFromLeft();
+  const frontend::MotionPrior prior = forwardPrior(0.5, 1e-4);
+  auto corner = [&](const Vector3d& p) {
+    frontend::LostCorner c;
+    c.xy = p.head<2>() / p.z();
+    const Vector3d p_r = T_r_l * p;
+    c.xy_right = p_r.head<2>() / p_r.z();
+    return c;
+  };
+  const Vector3d near_prev(1.0, -0.5, 8.0);
+  const auto near = predictStaticPoint(corner(near_prev), prior, *cam, T_r_l, 0.25, 2.0);
+  ASSERT_TRUE(near);
+  const Vector3d near_cur = near_prev - prior.t_prev_cur;  // P_prev = P_cur + t
+  Vector2d uv_true;
+  ASSERT_TRUE(cam->project(near_cur, uv_true));
+  EXPECT_NEAR((near->uv_pred - uv_true).norm(), 0.0, 1e-6);
+  EXPECT_NEAR((near->p_pred - near_cur).norm(), 0.0, 1e-9);
+  // Base 2 px + 3 prior sigmas (3 f sqrt(3e-4) / z) + the depth interval (> 0).
+  const double prior_term = 3.0 * kF * std::sqrt(3e-4) / near_prev.z();
+  EXPECT_GT(near->tol_px, 2.0 + prior_term);
+  EXPECT_LT(near->tol_px, 2.0 + prior_term + 1.0);
+  const auto still = predictStaticPoint(corner(near_prev), forwardPrior(0.0, 1e-4), *cam, T_r_l, 0.25, 2.0);
+  ASSERT_TRUE(still);
+  EXPECT_NEAR(still->tol_px, 2.0 + prior_term, 1e-9);
+  frontend::MotionPrior invalid = prior;
+  invalid.valid = false;
+  EXPECT_FALSE(predictStaticPoint(corner(near_prev), invalid, *cam, T_r_l, 0.25, 2.0));
+  const Vector3d behind_after(0.1, 0.0, 0.4);  // 0.4 m ahead, 0.5 m forward: behind the camera now
+  EXPECT_FALSE(predictStaticPoint(corner(behind_after), prior, *cam, T_r_l, 0.25, 2.0));
+}
+
 struct StereoPair {
   Vector2d l, r;
 };

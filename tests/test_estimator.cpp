@@ -44,8 +44,8 @@ RunResult runSequence(const sim::SimOptions& o, const std::function<void(std::si
   std::vector<ImuSample> imu;
   std::vector<GroundTruthState> gt;
   sim::synthesizeImu(scene.trajectory(), o, imu, gt);
-  frontend::FeatureTracker tracker(scene.rig());
-  Estimator estimator(scene.rig(), est_options);
+  frontend::FeatureTracker tracker(scene.rig().rig(), scene.rig().tracker);
+  Estimator estimator(scene.rig().rig(), scene.rig().imu, est_options);
   RunResult out;
   std::size_t next_imu = 0;
   for (std::size_t k = 0; k < scene.frameCount(); ++k) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include <algorithm>
 #include <map>
 #include <memory>
@@ -17,6 +19,7 @@
 #include "io/euroc_dataset.h"
 #include "sim/camera_effects.h"
 #include "sim/simulator.h"
+#include "sim_scenes.h"
 
 namespace idyvins::frontend {
 namespace {
@@ -24,42 +27,10 @@ namespace {
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
-StereoFrame stereo(const sim::SceneFrame& f) {
-  StereoFrame s;
-  s.t_ns = f.t_ns;
-  s.index = f.index;
-  s.left = f.cam[0].image;
-  s.right = f.cam[1].image;
-  return s;
-}
-
-sim::SimOptions options(const std::string& scene, sim::Level level, double duration, bool opening = false) {
-  sim::SimOptions o;
-  o.scene.scene = scene;
-  o.scene.level = level;
-  o.scene.seed = 1;
-  o.scene.opening_vehicle = opening;
-  o.duration_s = duration;
-  return o;
-}
-
-/// A city street without traffic plus one vehicle driving along `lane_dir` (default +y: crossing), textured as vehicle 1.
-sim::Scene crossingVehicleScene(double duration_s, const std::string& type, const Vector3d& size,
-                                const Vector3d& lane_start, double speed,
-                                const Vector3d& lane_dir = Vector3d::UnitY()) {
-  return sim::Scene(options("city", sim::Level::kNone, duration_s), [&](sim::World& w, const sim::TextureBank& tex) {
-    sim::Vehicle v;
-    v.id = 1;
-    v.type = type;
-    v.size = size;
-    v.lane_start = lane_start;
-    v.lane_dir = lane_dir;
-    v.lane_length = 400;
-    v.speed = speed;
-    v.texture = tex.index(sim::TextureKind::kVehicle, 1);
-    w.vehicles.push_back(v);
-  });
-}
+using test::crossingVehicleScene;
+using test::options;
+using test::stereo;
+using test::truePrior;
 
 /// Depth at a subpixel position when the 3x3 neighbourhood lies on one smooth surface.
 bool smoothDepth(const cv::Mat& depth, const Vector2d& uv, double& z, int r = 2) {
@@ -89,12 +60,16 @@ struct TrackAccuracy {
   std::size_t steps = 0;
 };
 
-TrackAccuracy measureTrackAccuracy(const TrackerParams& params, const std::string& realism = "none") {
+/// `change` edits the tracker keys of the rendered rig's config.
+TrackAccuracy measureTrackAccuracy(const std::function<void(TrackerParams&)>& change = {},
+                                   const std::string& realism = "none") {
   sim::SimOptions o = options("city", sim::Level::kNone, 5.0);
   o.realism = sim::realismPreset(realism);
   const sim::Scene scene(o);
   const Config& rig = scene.rig();
-  FeatureTracker tracker(rig, params);
+  TrackerParams params = rig.tracker;
+  if (change) change(params);
+  FeatureTracker tracker(rig.rig(), params);
   const auto cam = camera::makeCamera(rig.cams[0]);
   std::map<std::uint64_t, Vector3d> point_w;  // 3D point of each track, from its first frame
   std::map<std::uint64_t, bool> switched;
@@ -154,7 +129,7 @@ TrackAccuracy measureTrackAccuracy(const TrackerParams& params, const std::strin
 
 TEST(FeatureTracker, TracksFollowTheTrueProjectionsOnAStaticSequence) {
   // Measured: 9083 steps, median 0.071 px, p99 0.646 px, no id switch.
-  const TrackAccuracy acc = measureTrackAccuracy(TrackerParams{});
+  const TrackAccuracy acc = measureTrackAccuracy();
   ASSERT_GT(acc.steps, 3000u);
   EXPECT_LT(acc.median, 0.1);
   EXPECT_LT(acc.p99, 1.0);  // the front-end issue's target was 1.5 px; KLT alone: 2.09 px
@@ -168,10 +143,11 @@ TEST(FeatureTracker, CornersAtTheBorderWithACutFirstPatchStayAccurate) {
   // corner within 9 px, the whole patch asked): the tracks near the border are kept
   // (more track steps) and stay about as accurate. Measured: 9430 vs 9083 steps, median
   // 0.077 vs 0.071 px, p99 0.608 vs 0.646 px; within 12 px of the border median 0.082 px.
-  TrackerParams cut;
-  cut.corner_margin_px = 2;
-  cut.patch_min_inside = 0.5;
-  const TrackAccuracy near = measureTrackAccuracy(cut), away = measureTrackAccuracy(TrackerParams{});
+  const TrackAccuracy near = measureTrackAccuracy([](TrackerParams& cut) {
+    cut.corner_margin_px = 2;
+    cut.patch_min_inside = 0.5;
+  });
+  const TrackAccuracy away = measureTrackAccuracy();
   EXPECT_GT(near.steps, away.steps + away.steps / 50);
   EXPECT_LT(near.p99, 1.0);
   EXPECT_LT(near.median, 0.1);
@@ -181,7 +157,7 @@ TEST(FeatureTracker, TracksFollowTheTrueProjectionsAtRealismEuroc) {
   // The same measure on images with the euroc realism preset (vignetting, 10 % darker
   // right camera, auto-exposure, motion blur, defocus, shot/read noise, plain ground and
   // walls). Clean images above: see TracksFollowTheTrueProjectionsOnAStaticSequence.
-  const TrackAccuracy acc = measureTrackAccuracy(TrackerParams{}, "euroc");
+  const TrackAccuracy acc = measureTrackAccuracy({}, "euroc");
   RecordProperty("median_px", std::to_string(acc.median));
   RecordProperty("p99_px", std::to_string(acc.p99));
   RecordProperty("switch_rate", std::to_string(acc.switch_rate));
@@ -236,7 +212,7 @@ std::vector<StereoAccuracy> measureStereoAccuracy(const std::string& realism, co
   for (bool r : refine) {
     Config c = rig;
     c.tracker.stereo_refine = r;
-    trackers.push_back(std::make_unique<FeatureTracker>(c, TrackerParams{}));
+    trackers.push_back(std::make_unique<FeatureTracker>(c.rig(), c.tracker));
   }
   const auto cam1 = camera::makeCamera(rig.cams[1]);
   const Eigen::Isometry3d T_c1_c0 = rig.T_b_c[1].inverse() * rig.T_b_c[0];
@@ -293,10 +269,8 @@ TEST(FeatureTracker, StereoRefinementTightensRightMatchesAtRealism) {
 }
 
 TEST(FeatureTracker, FirstPatchAlignmentRemovesKltDrift) {
-  TrackerParams klt_only;
-  klt_only.align_first_patch = false;
-  const TrackAccuracy klt = measureTrackAccuracy(klt_only);
-  const TrackAccuracy aligned = measureTrackAccuracy(TrackerParams{});
+  const TrackAccuracy klt = measureTrackAccuracy([](TrackerParams& p) { p.align_first_patch = false; });
+  const TrackAccuracy aligned = measureTrackAccuracy();
   EXPECT_GT(klt.p99, 1.5);  // translation-only KLT drifts on oblique facades and the near ground
   EXPECT_LT(aligned.p99, 0.75 * klt.p99);
   EXPECT_LT(aligned.median, 0.5 * klt.median);
@@ -306,7 +280,7 @@ TEST(FeatureTracker, FirstPatchAlignmentRemovesKltDrift) {
 
 TEST(FeatureTracker, KeepsMaxCountAndMinDistance) {
   const sim::Scene scene(options("parking_lot", sim::Level::kNone, 0.5));
-  FeatureTracker tracker(scene.rig());
+  FeatureTracker tracker(scene.rig().rig(), scene.rig().tracker);
   FeatureFrame out;
   for (std::size_t k = 0; k < 6; ++k) out = tracker.track(stereo(scene.renderFrame(k)), MotionPrior{}, nullptr);
   EXPECT_LE(out.features.size(), 150u);
@@ -338,9 +312,9 @@ class RemoveLeftHalfOnce final : public FeatureFilter {
 /// (at its current position), and checks that eliminated ids never come back as features.
 int newCornersNearEliminated(bool keep_following, double radius, std::size_t& followed_reported) {
   const sim::Scene scene(options("parking_lot", sim::Level::kNone, 0.6));
-  TrackerParams params;
+  TrackerParams params = scene.rig().tracker;
   params.keep_following_eliminated = keep_following;
-  FeatureTracker tracker(scene.rig(), params);
+  FeatureTracker tracker(scene.rig().rig(), params);
   RemoveLeftHalfOnce filter(2 * 3);  // apply() runs twice per frame (tracked, then fresh corners)
   std::set<std::uint64_t> eliminated;
   std::vector<FeatureFrame> frames;
@@ -401,71 +375,6 @@ TEST(FeatureTracker, FollowsEliminatedFeaturesSoNoNewCornerIsSeededOnThem) {
   EXPECT_EQ(followed_off, 0u);
 }
 
-/// The exact camera motion between two rendered frames as a motion prior.
-MotionPrior truePrior(const sim::SceneFrame& prev, const sim::SceneFrame& cur, const Config& rig) {
-  const Eigen::Isometry3d T_prev_cur = (prev.T_w_b * rig.T_b_c[0]).inverse() * (cur.T_w_b * rig.T_b_c[0]);
-  MotionPrior p;
-  p.valid = true;
-  p.q_prev_cur = Eigen::Quaterniond(T_prev_cur.linear());
-  p.t_prev_cur = T_prev_cur.translation();
-  p.cov_p = Eigen::Matrix3d::Identity() * 1e-4;
-  return p;
-}
-
-TEST(FeatureTracker, LostNewCornersAwayFromTheirStaticPredictionAreJudgedMoving) {
-  // A car crosses 7-9 m ahead at 20 m/s: about 1 m per frame, too fast for KLT, so most of
-  // its new corners are lost in their second frame. Static corners lost at the same time
-  // (leaving the image, hidden by the truck) must mostly be found where the prior puts them
-  // or be recognised as hidden (something nearer stands there now).
-  const sim::Scene scene =
-      crossingVehicleScene(3.0, "truck", Vector3d(8.0, 2.5, 3.0), Vector3d(9.0, -30.0, 0.0), 20.0);
-  for (const bool judge : {true, false}) {
-    TrackerParams params;
-    params.judge_lost_new_tracks = judge;
-    FeatureTracker tracker(scene.rig(), params);
-    std::map<std::uint64_t, bool> new_on_vehicle;  // new corners of the previous frame
-    std::size_t lost_vehicle = 0, lost_static = 0, judged_vehicle = 0, judged_static = 0, tested = 0;
-    sim::SceneFrame prev = scene.renderFrame(0);
-    for (std::size_t k = 0; k < 61; ++k) {
-      const sim::SceneFrame f = k == 0 ? prev : scene.renderFrame(k);
-      const FeatureFrame out = tracker.track(stereo(f), k == 0 ? MotionPrior{} : truePrior(prev, f, scene.rig()), nullptr);
-      std::set<std::uint64_t> alive;
-      for (const auto& ft : out.features) alive.insert(ft.id);
-      for (const auto& [id, on_vehicle] : new_on_vehicle)
-        if (!alive.count(id)) (on_vehicle ? lost_vehicle : lost_static) += 1;
-      for (const auto& ft : out.lost_moving) {
-        ASSERT_TRUE(new_on_vehicle.count(ft.id)) << "only new corners of the previous frame are judged";
-        EXPECT_FALSE(alive.count(ft.id));
-        EXPECT_EQ(ft.label, FeatureLabel::kEliminated);
-        (new_on_vehicle[ft.id] ? judged_vehicle : judged_static) += 1;
-      }
-      tested += out.lost_tested;
-      new_on_vehicle.clear();
-      for (const auto& ft : out.features) {
-        if (ft.track_length != 1) continue;
-        new_on_vehicle[ft.id] = f.cam[0].mask.at<std::uint8_t>(static_cast<int>(std::lround(ft.uv.y())),
-                                                               static_cast<int>(std::lround(ft.uv.x()))) != 0;
-      }
-      prev = f;
-    }
-    std::printf("judge %d: new corners lost in their second frame: %zu on the car (%zu judged moving), %zu static "
-                "(%zu judged moving); %zu tested\n",
-                judge, lost_vehicle, judged_vehicle, lost_static, judged_static, tested);
-    if (!judge) {
-      EXPECT_EQ(judged_vehicle + judged_static + tested, 0u);
-      continue;
-    }
-    // Measured at 2d6b296: 440 of 642 on the truck, 19 of 509 static. Without the ZNCC
-    // ceiling (moved = any mismatch) 577 and 57: corners on the truck's silhouette over the
-    // background half match and are left alone now. Since no corner is detected where its
-    // first patch cannot be cut (near the border): 434 of 629 and 20 of 332 (the border
-    // corners were lost often and never judged moving).
-    ASSERT_GT(lost_vehicle, 100u);
-    EXPECT_GT(judged_vehicle, lost_vehicle * 6 / 10);
-    EXPECT_LT(judged_static, lost_static * 7 / 100);
-  }
-}
-
 /// Eliminates tracked features on a moving object once they are three frames long (a
 /// stand-in for the IDY filter, which needs a few frames to judge).
 class EliminateOnMaskFromThirdFrame final : public FeatureFilter {
@@ -488,11 +397,11 @@ TEST(FeatureTracker, CornersPrunedNextToAnEliminatedTrackThatMovedWithThemAreJud
       crossingVehicleScene(3.0, "truck", Vector3d(8.0, 2.5, 3.0), Vector3d(6.0, -1.5, 0.0), 10.0, Vector3d::UnitX());
   std::size_t counts[2][2] = {{0, 0}, {0, 0}};  // [move_with_eliminated on][on the truck]
   for (const bool on : {true, false}) {
-    TrackerParams params;
+    TrackerParams params = scene.rig().tracker;
     params.keep_following_eliminated = true;
     params.judge_lost_new_tracks = true;
     params.move_with_eliminated_px = on ? TrackerParams{}.move_with_eliminated_px : 0.0;
-    FeatureTracker tracker(scene.rig(), params);
+    FeatureTracker tracker(scene.rig().rig(), params);
     EliminateOnMaskFromThirdFrame filter;
     std::map<std::uint64_t, bool> on_truck;  // the corners output in their first frame
     for (std::size_t k = 0; k < 61; ++k) {
@@ -530,10 +439,10 @@ TEST(FeatureTracker, StereoMatchesWithLowZnccAreMoreOftenWrongOrBesideAVehicle) 
   const Config& rig = scene.rig();
   const auto cam1 = camera::makeCamera(rig.cams[1]);
   const Eigen::Isometry3d T_c1_c0 = rig.T_b_c[1].inverse() * rig.T_b_c[0];
-  TrackerParams params;
+  TrackerParams params = rig.tracker;
   const double min_zncc = params.stereo_min_zncc;
   params.stereo_min_zncc = -1.0;
-  FeatureTracker tracker(rig, params);
+  FeatureTracker tracker(rig.rig(), params);
   StereoMatchCounts low, high;
   for (std::size_t k = 0; k < 61; ++k) {
     const sim::SceneFrame f = scene.renderFrame(k);
@@ -578,7 +487,7 @@ TEST(FeatureTracker, StereoMatchesWithLowZnccAreMoreOftenWrongOrBesideAVehicle) 
 
 TEST(Rejection, SegDropsExactlyTheFeaturesOnMaskedPixels) {
   const sim::Scene scene(options("city", sim::Level::kHigh, 3.0));
-  FeatureTracker tracker(scene.rig());
+  FeatureTracker tracker(scene.rig().rig(), scene.rig().tracker);
   SegFilter seg;
   std::size_t removed = 0, kept = 0;
   for (std::size_t k = 0; k < 61; ++k) {
@@ -601,7 +510,7 @@ TEST(Rejection, RansacRejectsMostFeaturesOnACrossingVehicle) {
   // A car crosses the static street 15-20 m ahead of the drone.
   const sim::Scene scene =
       crossingVehicleScene(4.0, "car", Vector3d(4.5, 1.8, 1.5), Vector3d(20.0, -14.0, 0.0), 6.0);
-  FeatureTracker tracker(scene.rig());
+  FeatureTracker tracker(scene.rig().rig(), scene.rig().tracker);
   RansacFilter ransac(scene.rig().tracker.f_threshold);
   std::size_t on_vehicle = 0, on_vehicle_rejected = 0, static_total = 0, static_rejected = 0;
   for (std::size_t k = 0; k < 81; ++k) {
@@ -637,7 +546,7 @@ TEST(FeatureTracker, RunsOnTheRealEurocExcerpt) {
   const Config c = loadConfig(std::string(IDYVINS_SOURCE_DIR) + "/config/euroc/euroc_stereo_imu_config.yaml");
   const io::EurocDataset ds = io::readEurocDataset(std::string(IDYVINS_SHARED_DATA) + "/euroc_v101_micro");
   io::EurocSource source(ds, 752, 480);
-  FeatureTracker tracker(c);
+  FeatureTracker tracker(c.rig(), c.tracker);
   std::size_t frames = 0, stereo_matches = 0, features = 0, long_tracks = 0;
   while (auto m = source.next()) {
     const auto* f = std::get_if<StereoFrame>(&*m);
@@ -673,8 +582,8 @@ TEST(FeatureTracker, HoldsOnTheRealEurocExcerpt) {
     c.tracker.stereo_gain_compensation = gain_compensation;
     c.tracker.stereo_refine = refine;
     io::EurocSource source(ds, 752, 480);
-    FeatureTracker tracker(c);
-    TrackQuality quality(c);
+    FeatureTracker tracker(c.rig(), c.tracker);
+    TrackQuality quality(c.rig());
     while (auto m = source.next())
       if (const auto* f = std::get_if<StereoFrame>(&*m)) quality.add(tracker.track(*f, MotionPrior{}, nullptr));
     return quality.summary();
@@ -708,7 +617,7 @@ TEST(FeatureTracker, EqualizationLeavesTheCallersImagesAlone) {
   ASSERT_TRUE(c.tracker.equalize);
   const io::EurocDataset ds = io::readEurocDataset(std::string(IDYVINS_SHARED_DATA) + "/euroc_v101_micro");
   io::EurocSource source(ds, 752, 480);
-  FeatureTracker tracker(c);
+  FeatureTracker tracker(c.rig(), c.tracker);
   for (int frames = 0; frames < 3;) {
     auto m = source.next();
     ASSERT_TRUE(m.has_value());

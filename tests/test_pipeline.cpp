@@ -46,8 +46,8 @@ SceneRun runScene(Mode mode, double duration_s, const RunOptions& run_options = 
   std::vector<GroundTruthState> gt;
   sim::synthesizeImu(scene.trajectory(), o, imu, gt);
   Config config = scene.rig();
-  config.solver.max_solver_time_s = 1000;  // iterations, not the wall clock, end each solve
-  config.dynamic.mode = mode;
+  config.estimator.max_solver_time_s = 1000;  // iterations, not the wall clock, end each solve
+  config.mode = mode;
 
   System system(config, run_options);
   ObservationRecorder recorder(/*has_masks=*/true);
@@ -184,7 +184,7 @@ const OffsetSequence& offsetSequence() {
     for (const auto& g : gt) s.truth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
     for (std::size_t k = 0; k < scene.frameCount(); ++k) s.frames.push_back(scene.renderFrame(k));
     s.rig = scene.rig();
-    s.rig.solver.max_solver_time_s = 1000;
+    s.rig.estimator.max_solver_time_s = 1000;
     return s;
   }();
   return seq;
@@ -201,9 +201,9 @@ struct OffsetRun {
 OffsetRun runWithOffset(double config_td_s, bool estimate) {
   const OffsetSequence& seq = offsetSequence();
   Config config = seq.rig;
-  config.td_s = config_td_s;
-  config.estimate_td = estimate;
-  config.dynamic.mode = Mode::kBaseline;
+  config.estimator.td_s = config_td_s;
+  config.estimator.estimate_td = estimate;
+  config.mode = Mode::kBaseline;
   System system(config);
   struct Recorder final : FrameObserver {
     OffsetRun* run;
@@ -296,7 +296,7 @@ TEST(PipelineSystem, RejectsConfigsAndFramesItCannotRun) {
   config.num_cam = 1;
   EXPECT_THROW(System{config}, InputError);
   config = sim::rigConfig(o);
-  config.dynamic.mode = Mode::kSeg;
+  config.mode = Mode::kSeg;
   System seg(config);
   StereoFrame frame;
   frame.t_ns = 1;

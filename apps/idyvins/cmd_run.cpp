@@ -11,13 +11,11 @@
 #include "commands.h"
 #include "input.h"
 #include "core/error.h"
-#include "eval/trajectory_metrics.h"
 #include "io/bag_dataset.h"
 #include "io/config.h"
 #include "io/data_source.h"
-#include "io/ply.h"
-#include "io/trajectory_io.h"
 #include "pipeline/observers.h"
+#include "pipeline/outputs.h"
 #include "pipeline/system.h"
 #include "prefetch.h"
 #include "progress.h"
@@ -60,89 +58,6 @@ std::size_t drive(io::DataSource& source, pipeline::System& system, std::size_t 
   return frames;
 }
 
-std::vector<io::LabelledPoint> plyPoints(const std::vector<backend::MapPoint>& a,
-                                         const std::vector<backend::MapPoint>& b = {}) {
-  std::vector<io::LabelledPoint> out;
-  for (const auto* v : {&a, &b})
-    for (const auto& p : *v) out.push_back({p.p_w, io::plyLabel(p.label)});
-  return out;
-}
-
-void writeFiles(const std::string& out, const pipeline::Result& r) {
-  io::writePly(out + "/map_static.ply", plyPoints(r.static_map));
-  io::writePly(out + "/map_dynamic.ply", plyPoints(r.dynamic_map));
-  io::writePly(out + "/map_all.ply", plyPoints(r.static_map, r.dynamic_map));
-  std::vector<StampedPose> poses;
-  std::vector<GroundTruthState> states;  // the full estimated state, written as state.csv
-  for (const auto& s : r.trajectory) {
-    poses.push_back(pipeline::toStampedPose(s));
-    states.push_back({s.t_ns, s.state.p_w_b, s.state.q_w_b, s.state.v_w, s.state.bg, s.state.ba});
-  }
-  io::writeTum(out + "/trajectory.tum", poses);
-  io::writeEurocCsv(out + "/trajectory.csv", poses);
-  io::writeStateCsv(out + "/state.csv", states);
-}
-
-/// Mean per solve of where the window solves spent their time (ms) and how they ended.
-nlohmann::json solveProfileJson(const pipeline::Summary& s) {
-  const double n = static_cast<double>(std::max<std::size_t>(s.solves, 1));
-  const backend::SolveProfile& t = s.solve_sum;
-  return {{"solves", s.solves},
-          {"converged_fraction", s.solves_converged / n},
-          {"mean_iterations", t.iterations / n},
-          {"mean_build_ms", t.build_ms / n},
-          {"mean_preprocess_ms", t.preprocess_ms / n},
-          {"mean_residual_ms", t.residual_ms / n},
-          {"mean_jacobian_ms", t.jacobian_ms / n},
-          {"mean_linear_solver_ms", t.linear_solver_ms / n},
-          {"mean_minimizer_ms", t.minimizer_ms / n},
-          {"mean_post_ms", t.post_ms / n}};
-}
-
-nlohmann::json summaryJson(const pipeline::Result& r, Mode mode, double wall_s) {
-  const pipeline::Summary& s = r.summary;
-  const double n = static_cast<double>(s.frames), seq_s = toSeconds(s.last_t_ns - s.first_t_ns);
-  nlohmann::json resets = nlohmann::json::array();
-  for (const auto& e : s.resets) resets.push_back({{"t_ns", e.t_ns}, {"frame", e.frame}, {"why", e.why}});
-  return {{"frames", s.frames},
-          {"mode", toString(mode)},
-          {"sequence_s", seq_s},
-          {"wall_s", wall_s},
-          {"realtime_factor", seq_s / wall_s},
-          {"mean_tracking_ms", s.sum_tracking_ms / n},
-          {"mean_filter_ms", s.sum_filter_ms / n},
-          {"mean_optimization_ms", s.sum_optimization_ms / n},
-          {"mean_marginalization_ms", s.sum_marginalization_ms / n},
-          {"solve_profile", solveProfileJson(s)},
-          {"poses", r.trajectory.size()},
-          {"initialized_at_s", s.init_t_ns >= 0 ? toSeconds(s.init_t_ns - s.first_t_ns) : -1.0},
-          {"frames_without_prior", s.frames_without_prior},
-          {"frames_beyond_imu", s.frames_beyond_imu},
-          {"td_s", s.td_s},
-          {"td_estimated", s.td_estimated},
-          {"lost_new_corners_tested", s.lost_tested},
-          {"lost_new_corners_moving", s.lost_moving},
-          {"map_static_points", r.static_map.size()},
-          {"map_dynamic_points", r.dynamic_map.size()},
-          {"classification", nullptr},
-          {"resets", resets}};
-}
-
-/// ATE (SE3) against the dataset's ground truth, into the summary; silent when impossible.
-void addAte(nlohmann::json& summary, const std::vector<StampedPose>& gt, const pipeline::Result& r) {
-  if (gt.empty() || r.trajectory.size() <= 2) return;
-  std::vector<StampedPose> est;
-  for (const auto& s : r.trajectory) est.push_back(pipeline::toStampedPose(s));
-  try {
-    const auto ate = eval::computeAte(gt, est, eval::AlignMode::kSe3, 10'000'000);
-    std::vector<StampedPose> gt_pairs;
-    for (const auto& [i, j] : ate.pairs) gt_pairs.push_back(gt[i]);
-    summary["ate_rmse_m"] = ate.stats.rmse;
-    summary["path_length_m"] = eval::pathLength(gt_pairs);
-  } catch (const std::exception&) {  // no overlap with the ground truth: no ATE
-  }
-}
-
 void printSummary(const nlohmann::json& s, const std::string& out) {
   const double seq_s = s["sequence_s"], wall_s = s["wall_s"];
   std::printf("%zu frames (%.1f s) in %.1f s (%.1fx real time), mode %s, %d thread%s (%s)\n",
@@ -179,9 +94,9 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
 
 int runRun(const RunArgs& a) {
   Config config = loadConfig(a.config);
-  if (!a.mode.empty() && !parseMode(a.mode, config.dynamic.mode))
+  if (!a.mode.empty() && !parseMode(a.mode, config.mode))
     throw CLI::ValidationError("--mode", "expected " + modeNames() + ", got '" + a.mode + "'");
-  if (a.solver_time_limit) config.solver.time_limited = true;
+  if (a.solver_time_limit) config.estimator.time_limited = true;
   pipeline::RunOptions run;
   run.pipelined = a.threads == 2;
   run.feedback_delay = a.feedback_delay >= 0 ? a.feedback_delay : (run.pipelined ? 1 : 0);
@@ -211,13 +126,13 @@ int runRun(const RunArgs& a) {
   progress.finish();
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
 
-  nlohmann::json summary = summaryJson(result, system.mode(), wall_s);
+  nlohmann::json summary = pipeline::summaryJson(result, system.mode(), wall_s);
   summary["threads"] = system.threads();
   summary["feedback_delay"] = system.runOptions().feedback_delay;
   if (in.has_masks) summary["classification"] = pipeline::toJson(observations.classify(result));
   if (!a.dump_observations.empty()) observations.writeCsv(a.dump_observations, result);
-  writeFiles(a.out, result);
-  addAte(summary, in.groundtruth, result);
+  pipeline::writeResultFiles(a.out, result);
+  pipeline::addAte(summary, in.groundtruth, result);
   stats.finish(summary);
   stats_file.close();
   if (!stats_file) throw InputError(stats_part, "write failed");

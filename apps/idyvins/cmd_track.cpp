@@ -76,7 +76,7 @@ int runTrack(const TrackArgs& a) {
   Mode mode;
   if (!parseMode(a.mode, mode) || pipeline::traitsOf(mode).filter == pipeline::FilterKind::kIdy)
     throw CLI::ValidationError("--mode", "expected baseline|ransac|seg for the front end alone, got '" + a.mode + "'");
-  config.dynamic.mode = mode;
+  config.mode = mode;
   const Input in = openInput(a.dataset, config, "", pipeline::traitsOf(mode).needs_masks);  // a folder or a bag
   io::DataSource& source = *in.source;
   if (!a.save_tracks.empty()) {
@@ -84,11 +84,11 @@ int runTrack(const TrackArgs& a) {
     std::filesystem::create_directories(a.save_tracks, ec);
     if (ec) throw InputError(a.save_tracks, "cannot create folder: " + ec.message());
   }
-  pipeline::FrontEnd front_end(config, mode);  // the front end exactly as `run` uses it
+  pipeline::FrontEnd front_end(config);  // the front end exactly as `run` uses it
   const std::size_t total = a.max_frames ? std::min(a.max_frames, source.frameCount()) : source.frameCount();
   ProgressBar bar("track", total, "frames");
   std::size_t frames = 0, features = 0, stereo = 0, removed = 0;
-  frontend::TrackQuality quality(config);
+  frontend::TrackQuality quality(config.rig());
   eval::SequenceStatistics images(config.tracker.min_dist);
   double ms = 0, filter_ms = 0;
   while (frames < total) {

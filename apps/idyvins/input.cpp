@@ -16,7 +16,7 @@ Input openInput(const std::string& dataset, const Config& config, const std::str
                                       config.image_height);
     Input in;
     in.has_masks = masks && !index.segmentation.empty();
-    if (pipeline::traitsOf(config.dynamic.mode).needs_masks && !in.has_masks)
+    if (pipeline::traitsOf(config.mode).needs_masks && !in.has_masks)
       throw InputError(dataset, "mode seg needs ground-truth masks: a segmentation_topic in the config (VIODE: "
                                 "/cam0/segmentation)");
     std::optional<io::SegmentationColors> colors;
@@ -32,7 +32,7 @@ Input openInput(const std::string& dataset, const Config& config, const std::str
   for (const auto& g : ds.groundtruth) in.groundtruth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
   in.has_masks =
       masks && !ds.cam0.empty() && std::filesystem::is_directory(std::filesystem::path(ds.root) / "cam0" / "mask");
-  if (pipeline::traitsOf(config.dynamic.mode).needs_masks && !in.has_masks)
+  if (pipeline::traitsOf(config.mode).needs_masks && !in.has_masks)
     throw InputError(ds.root, "mode seg needs mav0/cam0/mask/ (ground-truth masks)");
   in.source = std::make_unique<io::EurocSource>(std::move(ds), config.image_width, config.image_height, in.has_masks);
   return in;

@@ -20,7 +20,7 @@ struct Input {
 };
 
 /// Opens `dataset` (a EuRoC folder or a ROS1 bag) for `config`. Masks are read when the
-/// dataset has them and `masks` is true; config.dynamic.mode seg without masks throws
+/// dataset has them and `masks` is true; config.mode seg without masks throws
 /// InputError, as does anything the readers refuse.
 Input openInput(const std::string& dataset, const Config& config, const std::string& groundtruth_topic,
                 bool masks = true);

@@ -101,16 +101,17 @@ void Estimator::Frame::setNav(const imu::NavState& s) {
   v << s.v_w, s.ba, s.bg;
 }
 
-Estimator::Estimator(const Config& config, const EstimatorOptions& options) : config_(config), options_(options) {
-  rig_.T_b_c0 = toExtrinsic(config.T_b_c[0]);
-  rig_.stereo = config.num_cam == 2;
-  if (rig_.stereo) rig_.T_b_c1 = toExtrinsic(config.T_b_c[1]);
-  rig_.focal_px = 0.5 * (config.cams[0].fx + config.cams[0].fy);
-  const bool fisheye = config.cams[0].type == camera::ModelType::kKannalaBrandt;
-  rig_.fx = fisheye ? rig_.focal_px : config.cams[0].fx;
-  rig_.fy = fisheye ? rig_.focal_px : config.cams[0].fy;
-  noise_ = config.imu;
-  td_s_ = config.td_s;
+Estimator::Estimator(const camera::Rig& cameras, const ImuNoise& noise, const EstimatorOptions& options)
+    : options_(options) {
+  rig_.T_b_c0 = toExtrinsic(cameras.T_b_c[0]);
+  rig_.stereo = cameras.stereo();
+  if (rig_.stereo) rig_.T_b_c1 = toExtrinsic(cameras.T_b_c[1]);
+  rig_.focal_px = 0.5 * (cameras.cams[0].fx + cameras.cams[0].fy);
+  const bool fisheye = cameras.cams[0].type == camera::ModelType::kKannalaBrandt;
+  rig_.fx = fisheye ? rig_.focal_px : cameras.cams[0].fx;
+  rig_.fy = fisheye ? rig_.focal_px : cameras.cams[0].fy;
+  noise_ = noise;
+  td_s_ = options.td_s;
 }
 
 void Estimator::addImu(const ImuSample& s) {
@@ -138,7 +139,7 @@ void Estimator::resetWindow() {
 
 void Estimator::resetAfterFailure() {
   resetWindow();
-  td_s_ = config_.td_s;  // a failure may come from a wrong offset: start again from the config's
+  td_s_ = options_.td_s;  // a failure may come from a wrong offset: start again from the config's
   td_restarted_ = false;
 }
 
@@ -179,7 +180,7 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     f.setNav(f.pre->predict(prev));
   }
   count_ = n;
-  r.keyframe = fm_.addFrame(n, ff, config_.solver.keyframe_parallax_px, rig_.focal_px, dynamic_ids_);
+  r.keyframe = fm_.addFrame(n, ff, options_.keyframe_parallax_px, rig_.focal_px, dynamic_ids_);
 
   if (!initialized_) {
     if (!initStep(r)) return r;
@@ -366,9 +367,9 @@ void Estimator::optimize(FrameResult& r) {
   }
   o.linear_solver_type = ceres::DENSE_SCHUR;
   o.trust_region_strategy_type = ceres::DOGLEG;
-  o.max_num_iterations = config_.solver.max_num_iterations;
-  o.function_tolerance = config_.solver.function_tolerance;
-  if (config_.solver.time_limited) o.max_solver_time_in_seconds = config_.solver.max_solver_time_s;  // live only
+  o.max_num_iterations = options_.max_num_iterations;
+  o.function_tolerance = options_.function_tolerance;
+  if (options_.time_limited) o.max_solver_time_in_seconds = options_.max_solver_time_s;  // live only
   o.num_threads = 1;  // deterministic
   const Isometry3d T_w_b0_before = frames_[0].T_w_b();
   const auto solve_start = std::chrono::steady_clock::now();
@@ -428,7 +429,7 @@ int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_p
   for (auto& [id, lm] : fm_.landmarks()) {
     if (!lm.usable()) continue;
     ++used;
-    const bool candidate = options_.candidate_weights && lm.label == frontend::FeatureLabel::kCandidate;
+    const bool candidate = options_.candidate_weights && lm.label == FeatureLabel::kCandidate;
     candidates += candidate;
     std::map<int, const double*> scale_of_frame;
     if (candidate) {
@@ -475,9 +476,9 @@ Vector3d Estimator::landmarkWorld(const Landmark& lm) const {
 }
 
 void Estimator::addToStaticMap(const Landmark& lm) {
-  if (!initialized_ || !lm.usable() || lm.label != frontend::FeatureLabel::kStatic || lm.obs.size() < 3) return;
+  if (!initialized_ || !lm.usable() || lm.label != FeatureLabel::kStatic || lm.obs.size() < 3) return;
   if (!mapped_.insert(lm.id).second) return;
-  static_map_.push_back({landmarkWorld(lm), frontend::FeatureLabel::kStatic, lm.id});
+  static_map_.push_back({landmarkWorld(lm), FeatureLabel::kStatic, lm.id});
 }
 
 void Estimator::flushMap() {
@@ -503,16 +504,16 @@ double Estimator::meanReprojectionErrorPx(const Landmark& lm, int last_n) const 
 void Estimator::postProcess(FrameResult& r) {
   std::vector<std::uint64_t> confirmed;
   for (auto& [id, lm] : fm_.landmarks()) {
-    if (lm.label != frontend::FeatureLabel::kCandidate || !lm.usable() || lm.obs.size() < 2) continue;
+    if (lm.label != FeatureLabel::kCandidate || !lm.usable() || lm.obs.size() < 2) continue;
     // The error of the observations made since the landmark was marked: a long static
     // history must not dilute an object that has just started to move.
     if (meanReprojectionErrorPx(lm, lm.candidate_obs) > options_.outlier_px) {
       confirmed.push_back(id);
       dynamic_ids_.insert(id);
       if (mapped_.insert(id).second)
-        r.confirmed_points.push_back({landmarkWorld(lm), frontend::FeatureLabel::kConfirmedDynamic, id});
+        r.confirmed_points.push_back({landmarkWorld(lm), FeatureLabel::kConfirmedDynamic, id});
     } else if (lm.candidate_obs >= options_.clear_after_observations) {
-      lm.label = frontend::FeatureLabel::kStatic;
+      lm.label = FeatureLabel::kStatic;
       lm.candidate_obs = 0;
       ++r.cleared;
     }
@@ -530,7 +531,7 @@ void Estimator::removeOutliers(FrameResult& r) {
       if (!dynamic_ids_.insert(id).second) continue;
       ++r.outliers_confirmed;
       if (mapped_.insert(id).second)
-        r.confirmed_points.push_back({landmarkWorld(fm_.landmarks().at(id)), frontend::FeatureLabel::kConfirmedDynamic, id});
+        r.confirmed_points.push_back({landmarkWorld(fm_.landmarks().at(id)), FeatureLabel::kConfirmedDynamic, id});
     }
   }
   fm_.remove(bad);

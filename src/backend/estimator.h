@@ -15,7 +15,8 @@
 #include "core/measurements.h"
 #include "frontend/feature_frame.h"
 #include "imu/preintegration.h"
-#include "io/config.h"
+#include "backend/estimator_options.h"
+#include "camera/rig.h"
 
 namespace ceres {
 class Problem;
@@ -31,31 +32,10 @@ constexpr double kTdInitSearchS = 0.03;
 /// A rotation-aligned offset this far (s) from the current one restarts the initialization.
 constexpr double kTdInitRestartS = 0.001;
 
-/// Estimator tuning beyond the config.
-struct EstimatorOptions {
-  double sigma_px = 1.5;          ///< pixel noise of projection factors
-  double huber_px = 1.0;          ///< Huber threshold (on the normalized residual)
-  double outlier_px = 3.0;        ///< mean reprojection error that removes a landmark
-  double init_rotation_check_deg = 3.0;  ///< PnP vs gyro disagreement that rejects an init frame
-  int min_pnp_points = 15;
-  /// DESIGN §4.5: candidate observations weighted by 1/m_j, recomputed every solver
-  /// iteration from the current poses (modes idy, idy-ba).
-  bool candidate_weights = false;
-  /// DESIGN §4.6: confirm candidates as dynamic (leave the window) or clear them to static.
-  bool post_process = false;
-  int clear_after_observations = 4;  ///< a candidate that passes with this many observations becomes static
-  /// Extension of §4.6 (config `confirm_outliers_dynamic`): a landmark removed by the outlier
-  /// test is confirmed dynamic (its track is ignored from then on, dynamic map) instead of
-  /// coming back as a new landmark from its next observation.
-  bool confirm_outliers = false;
-  /// Keep the oldest frame's yaw and position through each solve (backend/gauge.h).
-  bool fix_gauge = true;
-};
-
 /// A map point: static, eliminated in the front end, or confirmed dynamic.
 struct MapPoint {
   Eigen::Vector3d p_w;
-  frontend::FeatureLabel label = frontend::FeatureLabel::kStatic;
+  FeatureLabel label = FeatureLabel::kStatic;
   std::uint64_t id = 0;
 };
 
@@ -119,7 +99,7 @@ struct LatestState {
 /// One instance per sequence; feed IMU samples and frames in time order.
 class Estimator {
  public:
-  explicit Estimator(const Config& config, const EstimatorOptions& options = {});
+  Estimator(const camera::Rig& rig, const ImuNoise& noise, const EstimatorOptions& options);
   void addImu(const ImuSample& sample);
   FrameResult addFrame(const frontend::FeatureFrame& features);
   LatestState latest() const;
@@ -170,7 +150,7 @@ class Estimator {
   /// The blocks of a landmark's projection factor for `frame` (-1: its stereo factor in the
   /// anchor frame), the td block last when `with_td`.
   std::vector<double*> factorBlocks(Landmark& lm, int frame, bool with_td);
-  bool estimatesTd() const { return config_.estimate_td; }
+  bool estimatesTd() const { return options_.estimate_td; }
   void refreshWeights(std::deque<CandidateWeight>& weights) const;
   /// Moves the window back so that its oldest frame keeps its yaw and position (backend/gauge.h).
   void restoreGauge(const Eigen::Isometry3d& T_w_b0_before);
@@ -187,7 +167,6 @@ class Estimator {
   void dropSecondNewest();
   std::vector<Eigen::Isometry3d> windowPoses() const;
 
-  Config config_;
   EstimatorOptions options_;
   Rig rig_;
   ImuNoise noise_;

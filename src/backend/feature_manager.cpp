@@ -54,17 +54,17 @@ bool FeatureManager::addFrame(int frame, const frontend::FeatureFrame& ff, doubl
       lm.start_frame = frame;
       lm.obs.push_back(o);
       lm.label = f.label;
-      lm.candidate_obs = f.label == frontend::FeatureLabel::kCandidate ? 1 : 0;
+      lm.candidate_obs = f.label == FeatureLabel::kCandidate ? 1 : 0;
       landmarks_.emplace(f.id, lm);
       ++new_features;
     } else {
       Landmark& lm = it->second;
       lm.obs.push_back(o);
-      if (f.label == frontend::FeatureLabel::kCandidate && lm.label != frontend::FeatureLabel::kCandidate) {
+      if (f.label == FeatureLabel::kCandidate && lm.label != FeatureLabel::kCandidate) {
         lm.label = f.label;  // sticky until post-processing decides
         lm.candidate_obs = 0;
       }
-      if (lm.label == frontend::FeatureLabel::kCandidate) ++lm.candidate_obs;
+      if (lm.label == FeatureLabel::kCandidate) ++lm.candidate_obs;
       ++tracked;
       if (lm.obs.size() >= 4) ++long_tracks;
     }

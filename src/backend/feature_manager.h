@@ -30,7 +30,7 @@ struct Landmark {
   int start_frame = 0;
   std::vector<Observation> obs;
   double inv_depth = -1.0;  ///< ≤ 0: not triangulated
-  frontend::FeatureLabel label = frontend::FeatureLabel::kStatic;
+  FeatureLabel label = FeatureLabel::kStatic;
   int candidate_obs = 0;  ///< observations since it was (last) marked candidate (DESIGN §4.4, §4.6)
   int endFrame() const { return start_frame + static_cast<int>(obs.size()) - 1; }
   bool usable() const { return inv_depth > 0 && (obs.size() >= 2 || obs.front().has_right); }

@@ -5,6 +5,7 @@
 #include <numeric>
 #include <unordered_map>
 
+#include "camera/stereo.h"
 #include "core/so3.h"
 
 namespace idyvins::dynamic {
@@ -12,6 +13,12 @@ namespace idyvins::dynamic {
 using Eigen::Matrix3d;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
+
+/// Depth range (m) of the stereo points the dynamic-scene tests judge: nearer is a
+/// degenerate match, farther is clamped (a negative disparity from noise is a far point).
+constexpr double kMinDepthM = 0.1, kMaxDepthM = 1000.0;
+/// A point nearer than this (m) to either camera makes the stereo motion residual invalid.
+constexpr double kMinPointDepthM = 0.05;
 
 frontend::MotionPrior cameraMotionPrior(const imu::RelativeMotion& body, const Eigen::Isometry3d& T_b_c) {
   const Matrix3d R_bc = T_b_c.linear();
@@ -65,14 +72,16 @@ StereoMotionError stereoMotionError(const Vector2d& x0_l, const Vector2d& x0_r, 
   const Vector3d a = xr.cross(R_rl * d), b = xr.cross(t_rl);
   if (a.squaredNorm() < 1e-18) return out;
   const double lambda = -a.dot(b) / a.squaredNorm();
-  // Inverse depth, clamped to [1/1000 m, 1/0.1 m]: a negative disparity from noise is a far point.
-  const double rho = std::clamp(lambda > 0 ? 1.0 / lambda : 1e-3, 1e-3, 10.0);
+  // Inverse depth, clamped to [1/kMaxDepthM, 1/kMinDepthM]: a negative disparity from noise
+  // is a far point.
+  const double rho =
+      std::clamp(lambda > 0 ? 1.0 / lambda : 1.0 / kMaxDepthM, 1.0 / kMaxDepthM, 1.0 / kMinDepthM);
   bool ok = true;
   auto residual = [&](double r_inv, const Vector3d& t_pc) {
     Eigen::Matrix<double, 4, 1> r;
     const Vector3d P1 = R.transpose() * (d / r_inv - t_pc);
     const Vector3d Pr = R_rl * P1 + t_rl;
-    if (P1.z() < 0.05 || Pr.z() < 0.05) ok = false;
+    if (P1.z() < kMinPointDepthM || Pr.z() < kMinPointDepthM) ok = false;
     r.head<2>() = focal * (P1.head<2>() / P1.z() - x1_l);
     r.tail<2>() = focal * (Pr.head<2>() / Pr.z() - x1_r);
     return r;
@@ -192,7 +201,7 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
   }
   stats_.d_s = ds;
   const std::vector<bool> removed = eliminateAndMark(items, tracked, raw, ds);
-  if (o_.stereo.enabled) stereoTest(ctx, items, tracked, removed, R, fx);
+  if (o_.stereo.enabled && o_.T_r_l) stereoTest(ctx, items, tracked, removed, R, fx);
 }
 
 std::vector<bool> IdyFilter::eliminateAndMark(std::vector<frontend::FilterItem>& items,
@@ -251,9 +260,13 @@ void IdyFilter::markCandidate(frontend::Feature& f) {
   ++stats_.candidates;
 }
 
+/// Fewer features tested by the stereo motion test than this: the frame keeps the previous
+/// frame's noise scale.
+constexpr std::size_t kNoiseMinFeatures = 10;
+
 void IdyFilter::updateNoiseScale(const std::vector<StereoTested>& tested) {
   // The frame's noise scale, from its own χ² (kept from the last frame when too few).
-  if (static_cast<int>(tested.size()) >= o_.stereo.noise_min_features) {
+  if (tested.size() >= kNoiseMinFeatures) {
     std::vector<double> chi2;
     chi2.reserve(tested.size());
     for (const auto& t : tested) chi2.push_back(t.e.chi2);
@@ -264,7 +277,7 @@ void IdyFilter::updateNoiseScale(const std::vector<StereoTested>& tested) {
 
 void IdyFilter::judgeStereoFailures(std::vector<frontend::FilterItem>& items, const std::vector<StereoTested>& tested,
                                     std::unordered_map<std::uint64_t, StereoAnchor>& anchors, double fx) {
-  const double baseline_px = fx * o_.T_r_l.translation().norm();
+  const double baseline_px = fx * o_.T_r_l->translation().norm();
   for (const auto& t : tested) {
     auto& it = items[t.item];
     if (o_.stereo.min_disparity_px > 0 && baseline_px < o_.stereo.min_disparity_px * t.e.depth) continue;
@@ -311,7 +324,7 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
     // Beyond the first step the chained priors drift (velocity error × time).
     const double drift = o_.stereo.drift_mps * (anchor.steps - 1) * dt;
     const StereoMotionError e = stereoMotionError(anchor.xy_l, anchor.xy_r, it.feature->xy, it.feature->xy_right,
-                                                  o_.T_r_l, anchor.R, anchor.t, anchor.var_p + drift * drift, fx,
+                                                  *o_.T_r_l, anchor.R, anchor.t, anchor.var_p + drift * drift, fx,
                                                   o_.stereo.sigma_px);
     if (!e.valid) continue;
     it.feature->stereo_chi2 = e.chi2;
@@ -321,6 +334,62 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
   updateNoiseScale(tested);
   judgeStereoFailures(items, tested, anchors, fx);
   stereo_anchors_ = std::move(anchors);
+}
+
+std::optional<StaticPrediction> predictStaticPoint(const frontend::LostCorner& c, const frontend::MotionPrior& prior,
+                                                   const camera::CameraModel& left, const Eigen::Isometry3d& T_r_l,
+                                                   double sigma_px, double base_tol_px) {
+  double depth;
+  if (!prior.valid || !camera::stereoDepth(c.xy, c.xy_right, T_r_l, depth) || depth < kMinDepthM) return std::nullopt;
+  // The point as static, moved into the current frame by the prior (points of the current
+  // camera map into the previous one by R_prev_cur, t_prev_cur).
+  const Matrix3d R_cur_prev = prior.q_prev_cur.toRotationMatrix().transpose();
+  auto predict = [&](double z, Vector2d& uv) {
+    const Vector3d p_prev = Vector3d(c.xy.x(), c.xy.y(), 1.0) * z;
+    const Vector3d p_cur = R_cur_prev * (p_prev - prior.t_prev_cur);
+    return p_cur.z() > kMinDepthM && left.project(p_cur, uv);
+  };
+  StaticPrediction p;
+  if (!predict(depth, p.uv_pred)) return std::nullopt;
+  p.p_pred = R_cur_prev * (Vector3d(c.xy.x(), c.xy.y(), 1.0) * depth - prior.t_prev_cur);
+  const double f = left.focal(), b = T_r_l.translation().norm();
+  const double sigma_rho = std::sqrt(2.0) * sigma_px / (f * b);
+  double tol_depth = 0;
+  for (double s : {-3.0, 3.0}) {
+    const double rho = std::max(1.0 / depth + s * sigma_rho, 1e-6);  // up to a point at infinity
+    Vector2d uv;
+    if (!predict(1.0 / rho, uv)) return std::nullopt;  // the interval reaches behind the camera
+    tol_depth = std::max(tol_depth, (uv - p.uv_pred).norm());
+  }
+  p.tol_px = base_tol_px + tol_depth + 3.0 * f * std::sqrt(std::max(prior.cov_p.trace(), 0.0)) / depth;
+  return p;
+}
+
+frontend::LostCornerJudgement IdyFilter::judgeLost(const frontend::FilterContext& ctx,
+                                                   const std::vector<frontend::LostCorner>& lost,
+                                                   frontend::LostCornerProbe& probe) {
+  frontend::LostCornerJudgement j;
+  if (!ctx.prior || !ctx.camera || !o_.T_r_l) return j;
+  std::vector<frontend::LostCornerSearch> searches;
+  for (std::size_t i = 0; i < lost.size(); ++i) {
+    const auto p = predictStaticPoint(lost[i], *ctx.prior, *ctx.camera, *o_.T_r_l, o_.lost_stereo_sigma_px,
+                                      o_.lost_base_tolerance_px);
+    if (p && probe.searchable(p->uv_pred)) searches.push_back({i, p->uv_pred, p->p_pred, p->tol_px});
+  }
+  j.tested = searches.size();
+  if (searches.empty()) return j;
+  const std::vector<frontend::LostCornerFinding> found = probe.find(searches);
+  std::vector<frontend::LostCornerSearch> not_found;
+  for (std::size_t i = 0; i < searches.size(); ++i)
+    if (!found[i].found && found[i].best_zncc < o_.lost_max_zncc) not_found.push_back(searches[i]);
+  if (not_found.empty()) return j;
+  // Occlusion: something nearer than the static point now stands where it should be (a
+  // vehicle passing in front of the background): the corner is hidden, not moved.
+  const std::vector<double> depth = probe.depthAt(not_found);
+  for (std::size_t k = 0; k < not_found.size(); ++k)
+    if (!(depth[k] > 0 && depth[k] < o_.lost_occlusion_ratio * not_found[k].p_pred.z()))
+      j.moving.push_back(not_found[k].corner);
+  return j;
 }
 
 }  // namespace idyvins::dynamic

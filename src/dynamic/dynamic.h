@@ -5,15 +5,17 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
 
+#include "camera/camera_model.h"
 #include "camera/camera_params.h"
 #include "core/measurements.h"
 #include "frontend/feature_filter.h"
 #include "imu/preintegration.h"
-#include "io/config.h"
+#include "dynamic/idy_options.h"
 
 namespace idyvins::dynamic {
 
@@ -101,15 +103,21 @@ struct FrameStats {
   double stereo_noise_scale = 1;      ///< the χ² were divided by this (stereoNoiseScale)
 };
 
-/// Options of the `idy` filter (config keys in brackets).
-struct IdyOptions {
-  double lambda_dy = 4.0;    ///< px², elimination threshold (lambda_dy)
-  double lambda_dy_c = 1.0;  ///< px², candidate threshold (lambda_dy_c)
-  bool eliminate = true;     ///< false in mode idy-ba: only mark
-  /// Stereo motion test (extension); off unless enabled here (needs T_r_l).
-  StereoMotionOptions stereo{false};  // the other fields keep the config's defaults
-  Eigen::Isometry3d T_r_l = Eigen::Isometry3d::Identity();  ///< left camera -> right camera
+/// Extension of DESIGN §4.3 (not in the paper), the lost-corner test: where the motion
+/// prior puts a lost corner's previous-frame stereo point if it is static (p_pred in the
+/// current left camera, its pixel uv_pred), and how far from there it may be found:
+/// the stereo depth's 3σ interval (disparity noise √2 sigma_px), three prior position
+/// sigmas at the point's depth, and base_tol_px. Nullopt when it cannot be said (no valid
+/// prior, no usable depth, the point or its depth interval behind the camera).
+struct StaticPrediction {
+  Eigen::Vector3d p_pred;
+  Eigen::Vector2d uv_pred;
+  double tol_px;
 };
+std::optional<StaticPrediction> predictStaticPoint(const frontend::LostCorner& corner,
+                                                   const frontend::MotionPrior& prior,
+                                                   const camera::CameraModel& left, const Eigen::Isometry3d& T_r_l,
+                                                   double sigma_px, double base_tol_px);
 
 /// The `idy` front-end filter: d_s per tracked feature from the motion prior,
 /// elimination (remove), marking (label kCandidate). Frames without a valid prior
@@ -118,9 +126,19 @@ struct IdyOptions {
 class IdyFilter final : public frontend::FeatureFilter {
  public:
   explicit IdyFilter(const IdyOptions& options) : o_(options) {}
-  IdyFilter(double lambda_dy, double lambda_dy_c, bool eliminate = true)
-      : IdyFilter(IdyOptions{lambda_dy, lambda_dy_c, eliminate}) {}
+  /// The paper's filter alone (no T_r_l: no stereo motion test).
+  IdyFilter(double lambda_dy, double lambda_dy_c, bool eliminate = true) {
+    o_.lambda_dy = lambda_dy;
+    o_.lambda_dy_c = lambda_dy_c;
+    o_.eliminate = eliminate;
+  }
   void apply(const frontend::FilterContext& context, std::vector<frontend::FilterItem>& items) override;
+  /// The lost-corner test: a corner is judged moving when the tracker does not find it near
+  /// its static prediction (predictStaticPoint), its first patch matches clearly worse
+  /// than lost_max_zncc there, and no clearly nearer surface hides the prediction.
+  frontend::LostCornerJudgement judgeLost(const frontend::FilterContext& context,
+                                          const std::vector<frontend::LostCorner>& lost,
+                                          frontend::LostCornerProbe& probe) override;
   const FrameStats& lastStats() const { return stats_; }
 
  private:

@@ -118,33 +118,27 @@ void responsesOnOpenTiles(const cv::Mat& image, const std::vector<uchar>& open, 
   }
 }
 
-}  // namespace
+/// The tiles of a detection: which are open, and the allowed pixels of a row.
+struct TileGrid {
+  int width, height, tile, tiles_x, tiles_y;
+  std::vector<uchar> open;
+  const cv::Mat& mask;
+  std::vector<uchar> all_allowed;  ///< one row of 255 when there is no mask
+  bool isOpen(int tx, int ty) const { return open[static_cast<std::size_t>(ty) * tiles_x + tx] != 0; }
+  const uchar* maskRow(int y) const { return mask.empty() ? all_allowed.data() : mask.ptr<uchar>(y); }
+};
 
-std::vector<cv::Point2f> detectCorners(const cv::Mat& image, const cv::Mat& mask, const CornerOptions& options) {
-  if (image.type() != CV_8UC1) throw std::invalid_argument("detectCorners: the image must be CV_8UC1");
-  if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != image.size()))
-    throw std::invalid_argument("detectCorners: the mask must be CV_8UC1 and of the image's size");
-  if (options.tile < 4) throw std::invalid_argument("detectCorners: tile must be at least 4 px");
-  std::vector<cv::Point2f> corners;
-  const int width = image.cols, height = image.rows, tile = options.tile;
-  if (options.max_corners <= 0 || width < 3 || height < 3) return corners;
-  const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
-  const std::vector<uchar> open = openTiles(mask, width, height, tile, tiles_x, tiles_y);
-  cv::Mat eig(image.size(), CV_32FC1);
-  responsesOnOpenTiles(image, open, tile, tiles_x, tiles_y, eig);
-
-  // Threshold relative to the strongest response at an allowed pixel.
-  const std::vector<uchar> all_allowed(mask.empty() ? static_cast<std::size_t>(width) : 0, 255);
-  auto maskRow = [&](int y) { return mask.empty() ? all_allowed.data() : mask.ptr<uchar>(y); };
+/// The strongest response at an allowed pixel of an open tile (0 when there is none).
+float strongestResponse(const TileGrid& g, const cv::Mat& eig) {
   float strongest = 0.f;
   bool any = false;
-  for (int ty = 0; ty < tiles_y; ++ty)
-    for (int tx = 0; tx < tiles_x; ++tx) {
-      if (!open[static_cast<std::size_t>(ty) * tiles_x + tx]) continue;
-      const int x0 = tx * tile, x1 = std::min(width, x0 + tile);
-      for (int y = ty * tile; y < std::min(height, (ty + 1) * tile); ++y) {
+  for (int ty = 0; ty < g.tiles_y; ++ty)
+    for (int tx = 0; tx < g.tiles_x; ++tx) {
+      if (!g.isOpen(tx, ty)) continue;
+      const int x0 = tx * g.tile, x1 = std::min(g.width, x0 + g.tile);
+      for (int y = ty * g.tile; y < std::min(g.height, (ty + 1) * g.tile); ++y) {
         const float* e = eig.ptr<float>(y);
-        const uchar* m = maskRow(y);
+        const uchar* m = g.maskRow(y);
         for (int x = x0; x < x1; ++x)
           if (m[x] && (!any || e[x] > strongest)) {
             strongest = e[x];
@@ -152,36 +146,43 @@ std::vector<cv::Point2f> detectCorners(const cv::Mat& image, const cv::Mat& mask
           }
       }
     }
-  const float threshold = static_cast<float>(static_cast<double>(strongest) * options.quality_level);
+  return strongest;
+}
 
-  // Local maxima of the 3x3 neighbourhood above the threshold, at allowed pixels
-  // away from the image border.
+/// Local maxima of the 3x3 neighbourhood above `threshold`, at allowed pixels away from
+/// the image border, strongest first (ties: the later pixel first).
+std::vector<Candidate> localMaxima(const TileGrid& g, const cv::Mat& eig, float threshold) {
   std::vector<Candidate> candidates;
-  for (int ty = 0; ty < tiles_y; ++ty)
-    for (int tx = 0; tx < tiles_x; ++tx) {
-      if (!open[static_cast<std::size_t>(ty) * tiles_x + tx]) continue;
-      const int y_end = std::min(height - 1, (ty + 1) * tile), x_end = std::min(width - 1, (tx + 1) * tile);
-      for (int y = std::max(1, ty * tile); y < y_end; ++y) {
+  for (int ty = 0; ty < g.tiles_y; ++ty)
+    for (int tx = 0; tx < g.tiles_x; ++tx) {
+      if (!g.isOpen(tx, ty)) continue;
+      const int y_end = std::min(g.height - 1, (ty + 1) * g.tile), x_end = std::min(g.width - 1, (tx + 1) * g.tile);
+      for (int y = std::max(1, ty * g.tile); y < y_end; ++y) {
         const float* up = eig.ptr<float>(y - 1);
         const float* row = eig.ptr<float>(y);
         const float* down = eig.ptr<float>(y + 1);
-        const uchar* m = maskRow(y);
-        for (int x = std::max(1, tx * tile); x < x_end; ++x) {
+        const uchar* m = g.maskRow(y);
+        for (int x = std::max(1, tx * g.tile); x < x_end; ++x) {
           const float v = row[x];
           if (!(v > threshold) || !m[x]) continue;
           if (up[x - 1] > v || up[x] > v || up[x + 1] > v || row[x - 1] > v || row[x + 1] > v || down[x - 1] > v ||
               down[x] > v || down[x + 1] > v)
             continue;
-          candidates.push_back({v, y * width + x});
+          candidates.push_back({v, y * g.width + x});
         }
       }
     }
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
     return a.response != b.response ? a.response > b.response : a.index > b.index;
   });
+  return candidates;
+}
 
-  // Strongest first, none closer than min_distance to one already taken (grid of
-  // min_distance cells: only the 3x3 cells around a candidate can hold a conflict).
+/// Strongest first, none closer than min_distance to one already taken (grid of
+/// min_distance cells: only the 3x3 cells around a candidate can hold a conflict).
+std::vector<cv::Point2f> spreadOut(const std::vector<Candidate>& candidates, int width, int height,
+                                   const CornerOptions& options) {
+  std::vector<cv::Point2f> corners;
   const std::size_t n_max = static_cast<std::size_t>(options.max_corners);
   if (options.min_distance < 1.0) {
     for (std::size_t i = 0; i < candidates.size() && corners.size() < n_max; ++i)
@@ -212,6 +213,31 @@ std::vector<cv::Point2f> detectCorners(const cv::Mat& image, const cv::Mat& mask
     if (corners.size() == n_max) break;
   }
   return corners;
+}
+
+}  // namespace
+
+std::vector<cv::Point2f> detectCorners(const cv::Mat& image, const cv::Mat& mask, const CornerOptions& options) {
+  if (image.type() != CV_8UC1) throw std::invalid_argument("detectCorners: the image must be CV_8UC1");
+  if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != image.size()))
+    throw std::invalid_argument("detectCorners: the mask must be CV_8UC1 and of the image's size");
+  if (options.tile < 4) throw std::invalid_argument("detectCorners: tile must be at least 4 px");
+  const int width = image.cols, height = image.rows, tile = options.tile;
+  if (options.max_corners <= 0 || width < 3 || height < 3) return {};
+  const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
+  const TileGrid grid{width,
+                      height,
+                      tile,
+                      tiles_x,
+                      tiles_y,
+                      openTiles(mask, width, height, tile, tiles_x, tiles_y),
+                      mask,
+                      std::vector<uchar>(mask.empty() ? static_cast<std::size_t>(width) : 0, 255)};
+  cv::Mat eig(image.size(), CV_32FC1);
+  responsesOnOpenTiles(image, grid.open, tile, tiles_x, tiles_y, eig);
+  // Threshold relative to the strongest response at an allowed pixel.
+  const float threshold = static_cast<float>(static_cast<double>(strongestResponse(grid, eig)) * options.quality_level);
+  return spreadOut(localMaxima(grid, eig, threshold), width, height, options);
 }
 
 }  // namespace idyvins::frontend

@@ -31,11 +31,57 @@ struct FilterContext {
   TimeNs t_prev_ns = 0, t_cur_ns = 0;
 };
 
+/// A new corner lost in its second frame, as the tracker last saw it (the previous frame):
+/// left pixel and normalized coordinates and its right match.
+struct LostCorner {
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero(), xy = Eigen::Vector2d::Zero(), xy_right = Eigen::Vector2d::Zero();
+};
+
+/// Where a filter asks the tracker to look for a lost corner in the current frame.
+struct LostCornerSearch {
+  std::size_t corner = 0;                          ///< index into the lost corners
+  Eigen::Vector2d uv_pred = Eigen::Vector2d::Zero();  ///< left pixel to look at
+  Eigen::Vector3d p_pred = Eigen::Vector3d::Zero();   ///< the point expected there, current left camera (m)
+  double tol_px = 0;                                ///< how far from uv_pred a find counts
+};
+
+/// What the tracker measured at a search.
+struct LostCornerFinding {
+  bool found = false;     ///< the corner's first patch aligned within tol_px (KLT from uv_pred, then the patch)
+  double best_zncc = -1;  ///< the best ZNCC of the first patch within tol_px (-1: none)
+};
+
+/// The tracker's measurements for the lost-corner test (its images, pyramids and first
+/// patches); the judgement is the filter's (dynamic::IdyFilter).
+class LostCornerProbe {
+ public:
+  virtual ~LostCornerProbe() = default;
+  /// Whether a first patch centred at `uv` lies in the image (a search there is possible).
+  virtual bool searchable(const Eigen::Vector2d& uv) const = 0;
+  /// Looks for each searched corner near its predicted pixel.
+  virtual std::vector<LostCornerFinding> find(const std::vector<LostCornerSearch>& searches) = 0;
+  /// The stereo depth (left camera, m) of the surface now at each search's uv_pred (the
+  /// right image searched from where p_pred projects); 0 when unmatched or mono.
+  virtual std::vector<double> depthAt(const std::vector<LostCornerSearch>& searches) = 0;
+};
+
+/// The judgement of the lost corners of a frame.
+struct LostCornerJudgement {
+  std::size_t tested = 0;            ///< corners the static hypothesis could be tested on
+  std::vector<std::size_t> moving;   ///< indices of the corners judged moving, ascending
+};
+
 /// Interface of a rejection mode.
 class FeatureFilter {
  public:
   virtual ~FeatureFilter() = default;
   virtual void apply(const FilterContext& context, std::vector<FilterItem>& items) = 0;
+  /// Judges the new corners lost in this frame (TrackerParams::judge_lost_new_tracks);
+  /// by default none is judged.
+  virtual LostCornerJudgement judgeLost(const FilterContext& /*context*/, const std::vector<LostCorner>& /*lost*/,
+                                        LostCornerProbe& /*probe*/) {
+    return {};
+  }
 };
 
 /// `ransac`: fundamental-matrix RANSAC between consecutive left frames on

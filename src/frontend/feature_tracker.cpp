@@ -7,6 +7,7 @@
 #include <opencv2/video/tracking.hpp>
 #include <unordered_map>
 
+#include "camera/stereo.h"
 #include "core/so3.h"
 #include "frontend/corner_detector.h"
 
@@ -17,29 +18,19 @@ using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 Eigen::Vector2d toEigen(const cv::Point2f& p) { return {p.x, p.y}; }
 
-/// Depth in the left camera of a point seen at normalized xy_l (left) and xy_r (right),
-/// least squares over the two right-image equations; false when ill-conditioned.
-bool stereoDepth(const Eigen::Vector2d& xy_l, const Eigen::Vector2d& xy_r, const Eigen::Isometry3d& T_r_l,
-                 double& depth) {
-  const Eigen::Vector3d m(xy_l.x(), xy_l.y(), 1.0);
-  const Eigen::Vector3d Rm = T_r_l.linear() * m, t = T_r_l.translation();
-  // x_r (Rm.z d + t.z) = Rm.x d + t.x, same for y: a d = c.
-  const Eigen::Vector2d a(xy_r.x() * Rm.z() - Rm.x(), xy_r.y() * Rm.z() - Rm.y());
-  const Eigen::Vector2d c(t.x() - xy_r.x() * t.z(), t.y() - xy_r.y() * t.z());
-  const double aa = a.squaredNorm();
-  if (aa < 1e-12) return false;
-  depth = a.dot(c) / aa;
-  return std::isfinite(depth);
-}
 }  // namespace
 
-FeatureTracker::FeatureTracker(const Config& config, const TrackerParams& params) : config_(config), params_(params) {
-  for (const auto& c : config.cams) cams_.push_back(camera::makeCamera(c));
-  if (config.num_cam == 2) {
-    T_c1_c0_ = config.T_b_c[1].inverse() * config.T_b_c[0];
+FeatureTracker::FeatureTracker(const camera::Rig& rig, const TrackerParams& params) : params_(params) {
+  for (const auto& c : rig.cams) cams_.push_back(camera::makeCamera(c));
+  if (!rig.cams.empty()) {
+    image_width_ = rig.cams[0].width;
+    image_height_ = rig.cams[0].height;
+  }
+  if (rig.stereo()) {
+    T_c1_c0_ = rig.T_b_c[1].inverse() * rig.T_b_c[0];
     E_c1_c0_ = hat(T_c1_c0_.translation()) * T_c1_c0_.linear();
   }
-  if (config.tracker.equalize) clahe_ = cv::createCLAHE(3.0, cv::Size(8, 8));  // VINS-Mono's setting
+  if (params.equalize) clahe_ = cv::createCLAHE(3.0, cv::Size(8, 8));  // VINS-Mono's setting
 }
 
 cv::Mat matchBrightness(const cv::Mat& image, const cv::Mat& reference, double tolerance) {
@@ -88,7 +79,7 @@ AlignOptions FeatureTracker::alignOptions() const {
 
 bool FeatureTracker::inBorder(const cv::Point2f& p) const {
   const int b = params_.border_px;
-  return p.x >= b && p.y >= b && p.x < config_.image_width - b && p.y < config_.image_height - b;
+  return p.x >= b && p.y >= b && p.x < image_width_ - b && p.y < image_height_ - b;
 }
 
 void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Mat& image, std::vector<Track>& tracks,
@@ -100,16 +91,16 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Ma
   std::vector<float> err;
   const cv::Size win(params_.klt_window, params_.klt_window);
   const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations, params_.klt_epsilon);
-  cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, p0, p1, status, err, win, params_.klt_levels, crit);
-  if (config_.tracker.flow_back) {
+  cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, p0, p1, status, err, win, params_.klt_max_level, crit);
+  if (params_.flow_back) {
     back = p0;
-    cv::calcOpticalFlowPyrLK(pyr, prev_pyr_, p1, back, status_back, err, win, params_.klt_back_levels, crit,
+    cv::calcOpticalFlowPyrLK(pyr, prev_pyr_, p1, back, status_back, err, win, params_.klt_back_max_level, crit,
                              cv::OPTFLOW_USE_INITIAL_FLOW);
   }
   for (std::size_t i = 0; i < p0.size(); ++i) {
     const Track& old = prev_tracks_[i];
     bool ok = status[i] && inBorder(p1[i]);
-    if (ok && config_.tracker.flow_back)
+    if (ok && params_.flow_back)
       ok = status_back[i] && cv::norm(back[i] - p0[i]) <= params_.flow_back_px;
     if (!ok) {
       lost.push_back(&old);
@@ -142,61 +133,90 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Ma
   }
 }
 
-bool FeatureTracker::predictStatic(const Track& t, const MotionPrior& prior, Eigen::Vector3d& p_pred,
-                                   Eigen::Vector2d& uv_pred, double& tol_px) const {
-  if (!prior.valid || !t.has_right || !t.patch || cams_.size() < 2) return false;
-  double depth;
-  if (!stereoDepth(t.xy, t.xy_right, T_c1_c0_, depth) || depth < 0.1) return false;
-  // The point as static, moved into the current frame by the prior (points of the current
-  // camera map into the previous one by R_prev_cur, t_prev_cur).
-  const Eigen::Matrix3d R_cur_prev = prior.q_prev_cur.toRotationMatrix().transpose();
-  auto predict = [&](double z, Eigen::Vector2d& uv) {
-    const Eigen::Vector3d p_prev = Eigen::Vector3d(t.xy.x(), t.xy.y(), 1.0) * z;
-    const Eigen::Vector3d p_cur = R_cur_prev * (p_prev - prior.t_prev_cur);
-    return p_cur.z() > 0.1 && cams_[0]->project(p_cur, uv);
-  };
-  if (!predict(depth, uv_pred)) return false;
-  p_pred = R_cur_prev * (Eigen::Vector3d(t.xy.x(), t.xy.y(), 1.0) * depth - prior.t_prev_cur);
-  const double margin = params_.patch_half + 2;
-  if (uv_pred.x() < margin || uv_pred.y() < margin || uv_pred.x() >= config_.image_width - margin ||
-      uv_pred.y() >= config_.image_height - margin)
-    return false;
-  // Tolerance: the stereo depth's 3-sigma interval (disparity noise sqrt(2) sigma_px),
-  // three prior position sigmas at the point's depth, and a base term.
-  const double f = cams_[0]->focal(), b = T_c1_c0_.translation().norm();
-  const double sigma_rho = std::sqrt(2.0) * params_.lost_stereo_sigma_px / (f * b);
-  double tol_depth = 0;
-  for (double s : {-3.0, 3.0}) {
-    const double rho = std::max(1.0 / depth + s * sigma_rho, 1e-6);  // up to a point at infinity
-    Eigen::Vector2d uv;
-    if (!predict(1.0 / rho, uv)) return false;  // the interval reaches behind the camera: not judged
-    tol_depth = std::max(tol_depth, (uv - uv_pred).norm());
+/// The tracker's measurements for the lost-corner test of one frame (LostCornerProbe).
+class FeatureTracker::Probe final : public LostCornerProbe {
+ public:
+  Probe(const FeatureTracker& tracker, const cv::Mat& image, const std::vector<const Track*>& corners)
+      : tr_(tracker), image_(image), corners_(corners) {}
+  bool searchable(const Eigen::Vector2d& uv) const override {
+    const double margin = tr_.params_.patch_half + 2;
+    return uv.x() >= margin && uv.y() >= margin && uv.x() < tr_.image_width_ - margin &&
+           uv.y() < tr_.image_height_ - margin;
   }
-  tol_px = params_.lost_base_tolerance_px + tol_depth +
-           3.0 * f * std::sqrt(std::max(prior.cov_p.trace(), 0.0)) / depth;
-  return true;
+  std::vector<LostCornerFinding> find(const std::vector<LostCornerSearch>& searches) override;
+  std::vector<double> depthAt(const std::vector<LostCornerSearch>& searches) override;
+
+ private:
+  const FeatureTracker& tr_;
+  const cv::Mat& image_;
+  const std::vector<const Track*>& corners_;
+};
+
+std::vector<LostCornerFinding> FeatureTracker::Probe::find(const std::vector<LostCornerSearch>& searches) {
+  // KLT started at the prediction (a wider basin than the patch alignment alone).
+  std::vector<cv::Point2f> p0, p1;
+  for (const auto& q : searches) {
+    p0.push_back(corners_[q.corner]->uv);
+    p1.emplace_back(static_cast<float>(q.uv_pred.x()), static_cast<float>(q.uv_pred.y()));
+  }
+  const std::vector<uchar> status = tr_.kltFromGuess(tr_.prev_pyr_, tr_.cur_pyr_, p0, p1);
+  std::vector<LostCornerFinding> out(searches.size());
+  for (std::size_t i = 0; i < searches.size(); ++i) {
+    const Track& t = *corners_[searches[i].corner];
+    const Eigen::Vector2d& pred = searches[i].uv_pred;
+    LostCornerFinding& f = out[i];
+    auto foundFrom = [&](const Eigen::Vector2d& start) {
+      AffineWarp warp{t.A_patch, start};
+      const AlignResult r = alignAffine(*t.patch, image_, warp, tr_.alignOptions());
+      if ((warp.t - pred).norm() > searches[i].tol_px) return false;
+      f.best_zncc = std::max(f.best_zncc, r.zncc);
+      return r.converged && r.zncc >= tr_.params_.min_patch_zncc;
+    };
+    f.found = foundFrom(pred) ||
+              (status[i] && (toEigen(p1[i]) - pred).norm() <= searches[i].tol_px && foundFrom(toEigen(p1[i])));
+  }
+  return out;
 }
 
-void FeatureTracker::judgeLost(const std::vector<cv::Mat>& pyr, const cv::Mat& image, const MotionPrior& prior,
-                               const std::vector<const Track*>& lost, FeatureFrame& out) const {
-  std::vector<LostJudged> judged;
-  for (const Track* t : lost) {
-    LostJudged j{t, {}, {}, 0};
-    if (t->length != 1 || !predictStatic(*t, prior, j.p_pred, j.uv_pred, j.tol_px)) continue;  // longer tracks were scored
-    judged.push_back(j);
+std::vector<double> FeatureTracker::Probe::depthAt(const std::vector<LostCornerSearch>& searches) {
+  std::vector<double> depth(searches.size(), 0.0);
+  if (!tr_.has_right_image_ || searches.empty()) return depth;
+  std::vector<cv::Point2f> pl, pr;
+  for (const auto& q : searches) {
+    pl.emplace_back(static_cast<float>(q.uv_pred.x()), static_cast<float>(q.uv_pred.y()));
+    Eigen::Vector2d uv_r = q.uv_pred;
+    tr_.cams_[1]->project(tr_.T_c1_c0_ * q.p_pred, uv_r);
+    pr.emplace_back(static_cast<float>(uv_r.x()), static_cast<float>(uv_r.y()));
   }
-  out.lost_tested = judged.size();
-  if (judged.empty()) return;
-  const std::vector<std::size_t> not_found = notFoundNearPrediction(pyr, image, judged);
-  if (not_found.empty()) return;
-  const std::vector<uchar> hidden = hiddenAtPrediction(pyr, judged, not_found);
-  for (std::size_t j = 0; j < not_found.size(); ++j) {
-    if (hidden[j]) continue;
-    const Track& t = *judged[not_found[j]].track;
+  const std::vector<uchar> st = tr_.kltFromGuess(tr_.cur_pyr_, tr_.right_pyr_, pl, pr);
+  for (std::size_t j = 0; j < searches.size(); ++j) {
+    Eigen::Vector2d xy_l, xy_r;
+    double d;
+    if (st[j] && tr_.cams_[0]->liftToNormalized(searches[j].uv_pred, xy_l) &&
+        tr_.cams_[1]->liftToNormalized(toEigen(pr[j]), xy_r) && camera::stereoDepth(xy_l, xy_r, tr_.T_c1_c0_, d))
+      depth[j] = d;
+  }
+  return depth;
+}
+
+void FeatureTracker::judgeLost(const cv::Mat& image, const std::vector<const Track*>& lost, FrameWork& w) const {
+  std::vector<const Track*> corners;  // new corners (one frame) with a right match and a first patch
+  std::vector<LostCorner> seen;
+  for (const Track* t : lost) {
+    if (t->length != 1 || !t->has_right || !t->patch || cams_.size() < 2) continue;  // longer tracks were scored
+    corners.push_back(t);
+    seen.push_back({toEigen(t->uv), t->xy, t->xy_right});
+  }
+  if (corners.empty() || !w.filter) return;
+  Probe probe(*this, image, corners);
+  const LostCornerJudgement j = w.filter->judgeLost(w.ctx, seen, probe);
+  w.out.lost_tested = j.tested;
+  for (std::size_t i : j.moving) {
+    const Track& t = *corners[i];
     Feature f = featureOf(t, FeatureLabel::kEliminated);
     f.has_right = true;
     f.xy_right = t.xy_right;
-    out.lost_moving.push_back(f);
+    w.out.lost_moving.push_back(f);
   }
 }
 
@@ -206,67 +226,8 @@ std::vector<uchar> FeatureTracker::kltFromGuess(const std::vector<cv::Mat>& from
   std::vector<float> err;
   const cv::Size win(params_.klt_window, params_.klt_window);
   const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations, params_.klt_epsilon);
-  cv::calcOpticalFlowPyrLK(from, to, p0, p1, status, err, win, params_.klt_levels, crit, cv::OPTFLOW_USE_INITIAL_FLOW);
+  cv::calcOpticalFlowPyrLK(from, to, p0, p1, status, err, win, params_.klt_max_level, crit, cv::OPTFLOW_USE_INITIAL_FLOW);
   return status;
-}
-
-std::vector<std::size_t> FeatureTracker::notFoundNearPrediction(const std::vector<cv::Mat>& pyr, const cv::Mat& image,
-                                                                const std::vector<LostJudged>& judged) const {
-  // KLT started at the static prediction (a wider basin than the patch alignment alone).
-  std::vector<cv::Point2f> p0, p1;
-  for (const auto& j : judged) {
-    p0.push_back(j.track->uv);
-    p1.emplace_back(static_cast<float>(j.uv_pred.x()), static_cast<float>(j.uv_pred.y()));
-  }
-  const std::vector<uchar> status = kltFromGuess(prev_pyr_, pyr, p0, p1);
-  std::vector<std::size_t> not_found;
-  for (std::size_t i = 0; i < judged.size(); ++i) {
-    const Track& t = *judged[i].track;
-    const Eigen::Vector2d& pred = judged[i].uv_pred;
-    double best_zncc = -1;  // best match of the first patch near the prediction
-    auto foundFrom = [&](const Eigen::Vector2d& start) {
-      AffineWarp warp{t.A_patch, start};
-      const AlignResult r = alignAffine(*t.patch, image, warp, alignOptions());
-      if ((warp.t - pred).norm() > judged[i].tol_px) return false;
-      best_zncc = std::max(best_zncc, r.zncc);
-      return r.converged && r.zncc >= params_.min_patch_zncc;
-    };
-    if (foundFrom(pred)) continue;
-    if (status[i] && (toEigen(p1[i]) - pred).norm() <= judged[i].tol_px && foundFrom(toEigen(p1[i]))) continue;
-    // A corner on a silhouette (half background) still half matches there: only a clear
-    // mismatch counts as moved.
-    if (best_zncc >= params_.lost_max_zncc) continue;
-    not_found.push_back(i);
-  }
-  return not_found;
-}
-
-std::vector<uchar> FeatureTracker::hiddenAtPrediction(const std::vector<cv::Mat>& pyr,
-                                                      const std::vector<LostJudged>& judged,
-                                                      const std::vector<std::size_t>& not_found) const {
-  // Occlusion: something nearer than the static point now stands where it should be (a
-  // vehicle passing in front of the background). Stereo-match the predicted pixel; when
-  // the surface there is clearly nearer, the corner is hidden, not moved: not judged.
-  std::vector<uchar> hidden(not_found.size(), 0);
-  if (!has_right_image_) return hidden;
-  std::vector<cv::Point2f> pl, pr;
-  for (std::size_t i : not_found) {
-    const Eigen::Vector2d& pred = judged[i].uv_pred;
-    pl.emplace_back(static_cast<float>(pred.x()), static_cast<float>(pred.y()));
-    Eigen::Vector2d uv_r = pred;
-    cams_[1]->project(T_c1_c0_ * judged[i].p_pred, uv_r);
-    pr.emplace_back(static_cast<float>(uv_r.x()), static_cast<float>(uv_r.y()));
-  }
-  const std::vector<uchar> st = kltFromGuess(pyr, right_pyr_, pl, pr);
-  for (std::size_t j = 0; j < not_found.size(); ++j) {
-    const LostJudged& c = judged[not_found[j]];
-    Eigen::Vector2d xy_l, xy_r;
-    double depth;
-    hidden[j] = st[j] && cams_[0]->liftToNormalized(c.uv_pred, xy_l) &&
-                cams_[1]->liftToNormalized(toEigen(pr[j]), xy_r) && stereoDepth(xy_l, xy_r, T_c1_c0_, depth) &&
-                depth > 0 && depth < params_.lost_occlusion_ratio * c.p_pred.z();
-  }
-  return hidden;
 }
 
 void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected,
@@ -278,7 +239,7 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
   detect_mask_.create(image.size(), CV_8UC1);
   detect_mask_.setTo(cv::Scalar(255));
   cv::Mat& mask = detect_mask_;
-  const int r = static_cast<int>(config_.tracker.min_dist);
+  const int r = static_cast<int>(params_.min_dist);
   std::vector<Track> kept;
   const bool judge_pruned = params_.judge_lost_new_tracks && params_.keep_following_eliminated &&
                             params_.move_with_eliminated_px > 0 && !followed_.empty();
@@ -303,13 +264,13 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
     mask.colRange(0, b).setTo(cv::Scalar(0));
     mask.colRange(mask.cols - b, mask.cols).setTo(cv::Scalar(0));
   }
-  const int n_max = config_.tracker.max_cnt - static_cast<int>(tracks.size());
+  const int n_max = params_.max_cnt - static_cast<int>(tracks.size());
   detected = 0;
   if (n_max <= 0) return;
   CornerOptions corner_options;
   corner_options.max_corners = n_max;
   corner_options.quality_level = 0.01;
-  corner_options.min_distance = config_.tracker.min_dist;
+  corner_options.min_distance = params_.min_dist;
   const std::vector<cv::Point2f> corners = detectCorners(image, mask, corner_options);
   for (const auto& c : corners) {
     Eigen::Vector2d xy;
@@ -345,11 +306,11 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
   std::vector<float> err;
   for (std::size_t i = 0; i < n; ++i)
     pl[i] = cv::Point2f(static_cast<float>(features[(*which)[i]].uv.x()), static_cast<float>(features[(*which)[i]].uv.y()));
-  cv::calcOpticalFlowPyrLK(left_pyr, right_pyr, pl, pr, status, err, win, params_.klt_levels, crit, 0);
+  cv::calcOpticalFlowPyrLK(left_pyr, right_pyr, pl, pr, status, err, win, params_.klt_max_level, crit, 0);
   for (std::size_t i = 0; i < n; ++i) status[i] = status[i] && inBorder(pr[i]);
-  if (config_.tracker.flow_back) {
+  if (params_.flow_back) {
     back = pl;
-    cv::calcOpticalFlowPyrLK(right_pyr, left_pyr, pr, back, status_back, err, win, params_.klt_back_levels, crit,
+    cv::calcOpticalFlowPyrLK(right_pyr, left_pyr, pr, back, status_back, err, win, params_.klt_back_max_level, crit,
                              cv::OPTFLOW_USE_INITIAL_FLOW);
   }
   const double f = cams_[1]->focal();
@@ -357,8 +318,8 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
     Feature& feat = features[(*which)[i]];
     feat.has_right = false;
     bool ok = status[i] != 0;
-    if (ok && config_.tracker.flow_back) ok = status_back[i] && cv::norm(back[i] - pl[i]) <= params_.flow_back_px;
-    if (ok && config_.tracker.stereo_refine) {
+    if (ok && params_.flow_back) ok = status_back[i] && cv::norm(back[i] - pl[i]) <= params_.flow_back_px;
+    if (ok && params_.stereo_refine) {
       const PatchTemplate tmpl = makePatchTemplate(left_pyr[0], feat.uv, params_.patch_half, params_.patch_min_inside);
       AffineWarp warp;
       warp.t = toEigen(pr[i]);
@@ -372,7 +333,7 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
     const Eigen::Vector3d x0(feat.xy.x(), feat.xy.y(), 1.0), x1(xy_r.x(), xy_r.y(), 1.0);
     const Eigen::Vector3d line = E_c1_c0_ * x0;
     const double dist = std::abs(x1.dot(line)) / std::max(line.head<2>().norm(), 1e-12);
-    if (dist * f > config_.tracker.stereo_epipolar_px) continue;
+    if (dist * f > params_.stereo_epipolar_px) continue;
     if (params_.stereo_min_zncc > -1.0 &&
         patchZncc(left_pyr[0], feat.uv, right_pyr[0], toEigen(pr[i]), params_.patch_half, params_.patch_min_inside) <
             params_.stereo_min_zncc)
@@ -403,7 +364,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& input, const MotionPrior& 
   trackPrevious(cur_pyr_, frame.left, tracks, prev, lost);
   if (params_.judge_lost_new_tracks && !lost.empty()) {
     const auto t0 = Clock::now();
-    judgeLost(cur_pyr_, frame.left, prior, lost, w.out);
+    judgeLost(frame.left, lost, w);
     w.filter_ms = msSince(t0);  // judging lost new corners counts as dynamic preprocessing
   }
   w.out.tracked = tracks.size();
@@ -440,14 +401,14 @@ FeatureFrame FeatureTracker::track(const StereoFrame& input, const MotionPrior& 
 
 void FeatureTracker::buildPyramids(const StereoFrame& frame) {
   const cv::Size window(params_.klt_window, params_.klt_window);
-  cv::buildOpticalFlowPyramid(frame.left, cur_pyr_, window, params_.klt_levels);
+  cv::buildOpticalFlowPyramid(frame.left, cur_pyr_, window, params_.klt_max_level);
   // Right pyramid first: tracked features are matched in the right image before the
   // filter (a filter may compare stereo observations of consecutive frames).
   has_right_image_ = !frame.right.empty() && cams_.size() >= 2;
   if (has_right_image_) {
     const cv::Mat right =
-        config_.tracker.stereo_gain_compensation ? matchBrightness(frame.right, frame.left) : frame.right;
-    cv::buildOpticalFlowPyramid(right, right_pyr_, window, params_.klt_levels);
+        params_.stereo_gain_compensation ? matchBrightness(frame.right, frame.left) : frame.right;
+    cv::buildOpticalFlowPyramid(right, right_pyr_, window, params_.klt_max_level);
   }
 }
 

@@ -26,14 +26,14 @@ double epipolarDistancePx(const Eigen::Matrix3d& E_c1_c0, double f1, const Eigen
   return f1 * std::abs(xy1.homogeneous().dot(line)) / std::max(line.head<2>().norm(), 1e-12);
 }
 
-TrackQuality::TrackQuality(const Config& config) {
-  if (config.num_cam < 2 || config.cams.size() < 2 || config.T_b_c.size() < 2) return;
-  const Eigen::Isometry3d T_c1_c0 = config.T_b_c[1].inverse() * config.T_b_c[0];
+TrackQuality::TrackQuality(const camera::Rig& rig) {
+  if (!rig.stereo()) return;
+  const Eigen::Isometry3d T_c1_c0 = rig.T_b_c[1].inverse() * rig.T_b_c[0];
   const Eigen::Vector3d t = T_c1_c0.translation();
   Eigen::Matrix3d t_hat;
   t_hat << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
   E_c1_c0_ = t_hat * T_c1_c0.linear();
-  f1_ = camera::makeCamera(config.cams[1])->focal();
+  f1_ = camera::makeCamera(rig.cams[1])->focal();
   stereo_ = true;
 }
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "frontend/feature_frame.h"
-#include "io/config.h"
+#include "camera/rig.h"
 
 namespace idyvins::frontend {
 
@@ -30,9 +30,8 @@ double epipolarDistancePx(const Eigen::Matrix3d& E_c1_c0, double f1, const Eigen
 
 class TrackQuality {
  public:
-  /// Stereo extrinsics and cam1's focal length from the config (a mono config: no
-  /// epipolar figures).
-  explicit TrackQuality(const Config& config);
+  /// Stereo extrinsics and cam1's focal length from the rig (a mono rig: no epipolar figures).
+  explicit TrackQuality(const camera::Rig& rig);
   void add(const FeatureFrame& frame);
   TrackQualitySummary summary() const;
 

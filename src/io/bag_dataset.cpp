@@ -517,6 +517,26 @@ BagSource::BagSource(BagIndex index, int expected_width, int expected_height, st
   }
 }
 
+namespace {
+/// One image message as 8-bit gray, of the expected size; InputError otherwise.
+cv::Mat grayImage(const rosbag::MessageInstance& m, const std::string& type, const std::string& path,
+                  const std::string& topic, std::size_t ordinal, int width, int height) {
+  cv::Mat gray;
+  if (type == kImage) {
+    const auto img = m.instantiate<sensor_msgs::Image>();
+    if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+    gray = toGray(*img, path, topic, ordinal);
+  } else {
+    const auto img = m.instantiate<sensor_msgs::CompressedImage>();
+    if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+    gray = toGray(*img, path, topic, ordinal);
+  }
+  checkSize(path, topic, ordinal, gray.cols, gray.rows, width, height);
+  return gray;
+}
+
+}  // namespace
+
 BagSource::~BagSource() = default;
 
 bool BagSource::nextPairImages(cv::Mat& left, cv::Mat& right, cv::Mat& mask) {
@@ -534,20 +554,7 @@ bool BagSource::nextPairImages(cv::Mat& left, cv::Mat& right, cv::Mat& mask) {
   const std::size_t seg_i = static_cast<std::size_t>(std::max(0L, seg_k));
   const std::string& path = index_.path;
   auto decode = [&](const rosbag::MessageInstance& m, const std::string& type, const std::string& topic,
-                    std::size_t ordinal) {
-    cv::Mat gray;
-    if (type == kImage) {
-      const auto img = m.instantiate<sensor_msgs::Image>();
-      if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
-      gray = toGray(*img, path, topic, ordinal);
-    } else {
-      const auto img = m.instantiate<sensor_msgs::CompressedImage>();
-      if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
-      gray = toGray(*img, path, topic, ordinal);
-    }
-    checkSize(path, topic, ordinal, gray.cols, gray.rows, width_, height_);
-    return gray;
-  };
+                    std::size_t ordinal) { return grayImage(m, type, path, topic, ordinal, width_, height_); };
   try {
     while (!(r.left.count(pair.i0) && (!stereo || r.right.count(pair.i1)) && (!masks_ || r.seg.count(seg_i)))) {
       if (r.it == r.view->end())

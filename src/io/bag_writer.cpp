@@ -91,6 +91,51 @@ sensor_msgs::Image imageMsg(const cv::Mat& image, TimeNs t, const std::string& f
   return m;
 }
 
+sensor_msgs::Imu imuMsg(const ImuSample& s) {
+  sensor_msgs::Imu m;
+  m.header.stamp = rosTime(s.t_ns);
+  m.header.frame_id = "imu";
+  m.angular_velocity.x = s.gyr_b.x();
+  m.angular_velocity.y = s.gyr_b.y();
+  m.angular_velocity.z = s.gyr_b.z();
+  m.linear_acceleration.x = s.acc_b.x();
+  m.linear_acceleration.y = s.acc_b.y();
+  m.linear_acceleration.z = s.acc_b.z();
+  m.orientation_covariance[0] = -1;  // no orientation
+  return m;
+}
+
+nav_msgs::Odometry odometryMsg(const GroundTruthState& g) {
+  nav_msgs::Odometry m;
+  m.header.stamp = rosTime(g.t_ns);
+  m.header.frame_id = "world";
+  m.child_frame_id = "body";
+  m.pose.pose.position.x = g.p_w_b.x();
+  m.pose.pose.position.y = g.p_w_b.y();
+  m.pose.pose.position.z = g.p_w_b.z();
+  m.pose.pose.orientation.w = g.q_w_b.w();
+  m.pose.pose.orientation.x = g.q_w_b.x();
+  m.pose.pose.orientation.y = g.q_w_b.y();
+  m.pose.pose.orientation.z = g.q_w_b.z();
+  m.twist.twist.linear.x = g.v_w.x();
+  m.twist.twist.linear.y = g.v_w.y();
+  m.twist.twist.linear.z = g.v_w.z();
+  return m;
+}
+
+/// The segmentation image of a left frame (its mask/ PNG of object ids) in VIODE's colours.
+cv::Mat segmentationRgb(const EurocDataset& ds, const StereoPair& p, const std::string& csv0, const cv::Size& size,
+                        const std::array<cv::Vec3b, 256>& colours) {
+  const std::filesystem::path image(ds.cam0[p.i0].path);
+  ImageRecord mask_record = ds.cam0[p.i0];
+  mask_record.path = (image.parent_path().parent_path() / "mask" / image.filename()).string();
+  const cv::Mat ids = loadGrayImage(mask_record, csv0, size.width, size.height);
+  cv::Mat rgb(ids.size(), CV_8UC3);
+  for (int y = 0; y < ids.rows; ++y)
+    for (int x = 0; x < ids.cols; ++x) rgb.at<cv::Vec3b>(y, x) = colours[ids.at<uchar>(y, x)];
+  return rgb;
+}
+
 }  // namespace
 
 void writeViodeBag(const EurocDataset& ds, const std::string& bag_path, const BagWriteOptions& options) {
@@ -107,38 +152,10 @@ void writeViodeBag(const EurocDataset& ds, const std::string& bag_path, const Ba
     // Messages in time order: IMU and ground truth with a stamp up to a frame's come first.
     std::size_t i_imu = 0, i_gt = 0;
     auto flushUntil = [&](TimeNs t) {
-      while (i_imu < ds.imu.size() && ds.imu[i_imu].t_ns <= t) {
-        const ImuSample& s = ds.imu[i_imu++];
-        sensor_msgs::Imu m;
-        m.header.stamp = rosTime(s.t_ns);
-        m.header.frame_id = "imu";
-        m.angular_velocity.x = s.gyr_b.x();
-        m.angular_velocity.y = s.gyr_b.y();
-        m.angular_velocity.z = s.gyr_b.z();
-        m.linear_acceleration.x = s.acc_b.x();
-        m.linear_acceleration.y = s.acc_b.y();
-        m.linear_acceleration.z = s.acc_b.z();
-        m.orientation_covariance[0] = -1;  // no orientation
-        bag.write("/imu0", m.header.stamp, m);
-      }
-      while (i_gt < ds.groundtruth.size() && ds.groundtruth[i_gt].t_ns <= t) {
-        const GroundTruthState& g = ds.groundtruth[i_gt++];
-        nav_msgs::Odometry m;
-        m.header.stamp = rosTime(g.t_ns);
-        m.header.frame_id = "world";
-        m.child_frame_id = "body";
-        m.pose.pose.position.x = g.p_w_b.x();
-        m.pose.pose.position.y = g.p_w_b.y();
-        m.pose.pose.position.z = g.p_w_b.z();
-        m.pose.pose.orientation.w = g.q_w_b.w();
-        m.pose.pose.orientation.x = g.q_w_b.x();
-        m.pose.pose.orientation.y = g.q_w_b.y();
-        m.pose.pose.orientation.z = g.q_w_b.z();
-        m.twist.twist.linear.x = g.v_w.x();
-        m.twist.twist.linear.y = g.v_w.y();
-        m.twist.twist.linear.z = g.v_w.z();
-        bag.write("/odometry", m.header.stamp, m);
-      }
+      for (; i_imu < ds.imu.size() && ds.imu[i_imu].t_ns <= t; ++i_imu)
+        bag.write("/imu0", rosTime(ds.imu[i_imu].t_ns), imuMsg(ds.imu[i_imu]));
+      for (; i_gt < ds.groundtruth.size() && ds.groundtruth[i_gt].t_ns <= t; ++i_gt)
+        bag.write("/odometry", rosTime(ds.groundtruth[i_gt].t_ns), odometryMsg(ds.groundtruth[i_gt]));
     };
     const std::string csv0 = (std::filesystem::path(ds.root) / "cam0" / "data.csv").string();
     const std::string csv1 = (std::filesystem::path(ds.root) / "cam1" / "data.csv").string();
@@ -150,16 +167,9 @@ void writeViodeBag(const EurocDataset& ds, const std::string& bag_path, const Ba
         const cv::Mat right = loadGrayImage(ds.cam1[p.i1], csv1, left.cols, left.rows);
         bag.write("/cam1/image_raw", rosTime(ds.cam1[p.i1].t_ns), imageMsg(right, ds.cam1[p.i1].t_ns, "cam1"));
       }
-      if (segmentation) {
-        const std::filesystem::path image(ds.cam0[p.i0].path);
-        ImageRecord mask_record = ds.cam0[p.i0];
-        mask_record.path = (image.parent_path().parent_path() / "mask" / image.filename()).string();
-        const cv::Mat ids = loadGrayImage(mask_record, csv0, left.cols, left.rows);
-        cv::Mat rgb(ids.size(), CV_8UC3);
-        for (int y = 0; y < ids.rows; ++y)
-          for (int x = 0; x < ids.cols; ++x) rgb.at<cv::Vec3b>(y, x) = colours[ids.at<uchar>(y, x)];
-        bag.write("/cam0/segmentation", rosTime(ds.cam0[p.i0].t_ns), imageMsg(rgb, ds.cam0[p.i0].t_ns, "cam0"));
-      }
+      if (segmentation)
+        bag.write("/cam0/segmentation", rosTime(ds.cam0[p.i0].t_ns),
+                  imageMsg(segmentationRgb(ds, p, csv0, left.size(), colours), ds.cam0[p.i0].t_ns, "cam0"));
     }
     flushUntil(std::numeric_limits<TimeNs>::max());
     bag.close();

@@ -78,11 +78,6 @@ double getDouble(const YamlFile& f, const YAML::Node& parent, const std::string&
   return v;
 }
 
-double getDoubleOr(const YamlFile& f, const std::string& key, double fallback) {
-  const YAML::Node node = f.root[key];
-  return node ? getDouble(f, f.root, key, "") : fallback;
-}
-
 int getInt(const YamlFile& f, const YAML::Node& parent, const std::string& key,
            const std::string& what) {
   return scalarAs<int>(f, require(f, parent, key, what), key, "an integer");
@@ -91,12 +86,6 @@ int getInt(const YamlFile& f, const YAML::Node& parent, const std::string& key,
 std::string getString(const YamlFile& f, const YAML::Node& parent, const std::string& key,
                       const std::string& what) {
   return scalarAs<std::string>(f, require(f, parent, key, what), key, "a string");
-}
-
-void checkPositive(const YamlFile& f, const std::string& key, double value) {
-  if (!(value > 0))
-    throw InputError(f.path, lineOf(f.root[key]),
-                     "key '" + key + "': expected a positive value, got " + std::to_string(value));
 }
 
 /// Reads a 4x4 `!!opencv-matrix` rigid transform (rotation checked, then re-orthonormalized).
@@ -216,108 +205,119 @@ void readCameras(const YamlFile& f, const std::string& path, Config& c) {
   }
 }
 
-/// IMU noise, tracker and solver keys.
-void readImuTrackerSolver(const YamlFile& f, Config& c) {
-  if (c.use_imu) {
-    c.imu.acc_n = getDouble(f, f.root, "acc_n", "accelerometer noise density");
-    c.imu.gyr_n = getDouble(f, f.root, "gyr_n", "gyroscope noise density");
-    c.imu.acc_w = getDouble(f, f.root, "acc_w", "accelerometer bias random walk");
-    c.imu.gyr_w = getDouble(f, f.root, "gyr_w", "gyroscope bias random walk");
-    c.imu.g_norm = getDouble(f, f.root, "g_norm", "gravity magnitude, m/s^2");
-    for (const char* k : {"acc_n", "gyr_n", "acc_w", "gyr_w", "g_norm"})
-      checkPositive(f, k, getDouble(f, f.root, k, ""));
+const char* ruleText(ParamRule rule) {
+  switch (rule) {
+    case ParamRule::kPositive: return "a positive value";
+    case ParamRule::kNonNegative: return "a value >= 0";
+    case ParamRule::kOpenUnit: return "a value in (0, 1)";
+    case ParamRule::kFraction: return "a value in (0, 1]";
+    case ParamRule::kCorrelation: return "a value in [-1, 1]";
+    case ParamRule::kAny: break;
   }
-
-  c.tracker.max_cnt = getInt(f, f.root, "max_cnt", "features per frame");
-  c.tracker.min_dist = getDouble(f, f.root, "min_dist", "pixels between features");
-  c.tracker.f_threshold = getDouble(f, f.root, "F_threshold", "RANSAC threshold, pixels");
-  c.tracker.flow_back = getInt(f, f.root, "flow_back", "0 or 1") != 0;
-  if (f.root["equalize"]) c.tracker.equalize = getInt(f, f.root, "equalize", "0 or 1") != 0;
-  if (f.root["stereo_gain_compensation"])
-    c.tracker.stereo_gain_compensation = getInt(f, f.root, "stereo_gain_compensation", "0 or 1") != 0;
-  c.tracker.stereo_epipolar_px = getDoubleOr(f, "stereo_epipolar_px", c.tracker.stereo_epipolar_px);
-  checkPositive(f, "stereo_epipolar_px", c.tracker.stereo_epipolar_px);
-  if (f.root["stereo_refine"]) c.tracker.stereo_refine = getInt(f, f.root, "stereo_refine", "0 or 1") != 0;
-  c.solver.max_solver_time_s = getDouble(f, f.root, "max_solver_time", "seconds per solve");
-  c.solver.max_num_iterations = getInt(f, f.root, "max_num_iterations", "solver iterations");
-  c.solver.keyframe_parallax_px = getDouble(f, f.root, "keyframe_parallax", "pixels");
-  checkPositive(f, "max_cnt", c.tracker.max_cnt);
-  checkPositive(f, "max_solver_time", c.solver.max_solver_time_s);
-  checkPositive(f, "max_num_iterations", c.solver.max_num_iterations);
-  if (f.root["solver_time_limit"])
-    c.solver.time_limited = getInt(f, f.root, "solver_time_limit", "0 or 1") != 0;
-  c.solver.function_tolerance = getDoubleOr(f, "solver_function_tolerance", c.solver.function_tolerance);
-  checkPositive(f, "solver_function_tolerance", c.solver.function_tolerance);
+  return "a number";
 }
 
-/// The stereo motion test's keys (`stereo_motion_*`), all optional.
-void readStereoMotion(const YamlFile& f, StereoMotionOptions& m) {
-  if (f.root["stereo_motion_test"])
-    m.enabled = getInt(f, f.root, "stereo_motion_test", "0 or 1") != 0;
-  m.chi2 = getDoubleOr(f, "stereo_motion_chi2", m.chi2);
-  m.sigma_px = getDoubleOr(f, "stereo_motion_sigma_px", m.sigma_px);
-  if (f.root["stereo_motion_strikes"]) {
-    m.strikes = getInt(f, f.root, "stereo_motion_strikes", "consecutive failures, >= 1");
-    checkPositive(f, "stereo_motion_strikes", m.strikes);
+bool satisfies(double v, ParamRule rule) {
+  switch (rule) {
+    case ParamRule::kPositive: return v > 0;
+    case ParamRule::kNonNegative: return v >= 0;
+    case ParamRule::kOpenUnit: return v > 0 && v < 1;
+    case ParamRule::kFraction: return v > 0 && v <= 1;
+    case ParamRule::kCorrelation: return v >= -1 && v <= 1;
+    case ParamRule::kAny: break;
   }
-  if (f.root["stereo_motion_anchor_frames"]) {
-    m.anchor_frames = getInt(f, f.root, "stereo_motion_anchor_frames", "frames, >= 1");
-    checkPositive(f, "stereo_motion_anchor_frames", m.anchor_frames);
-  }
-  m.drift_mps = getDoubleOr(f, "stereo_motion_drift_mps", m.drift_mps);
-  m.remove_chi2 = getDoubleOr(f, "stereo_motion_remove_chi2", m.remove_chi2);
-  if (f.root["stereo_motion_persistent_strikes"]) {
-    m.persistent_strikes =
-        getInt(f, f.root, "stereo_motion_persistent_strikes", "consecutive failures, >= 0 (0 = never)");
-    if (m.persistent_strikes < 0)
-      throw InputError(f.path, lineOf(f.root["stereo_motion_persistent_strikes"]),
-                       "key 'stereo_motion_persistent_strikes': expected consecutive failures >= 0 (0 = never), got " +
-                           std::to_string(m.persistent_strikes));
-  }
-  if (!(m.remove_chi2 >= 0))
-    throw InputError(f.path, lineOf(f.root["stereo_motion_remove_chi2"]),
-                     "key 'stereo_motion_remove_chi2': expected a chi2 >= 0 (0 = stereo_motion_chi2), got " +
-                         std::to_string(m.remove_chi2));
-  m.left_chi2 = getDoubleOr(f, "stereo_motion_left_chi2", m.left_chi2);
-  m.noise_ref = getDoubleOr(f, "stereo_motion_noise_ref", m.noise_ref);
-  m.noise_quantile = getDoubleOr(f, "stereo_motion_noise_quantile", m.noise_quantile);
-  m.min_disparity_px =
-      getDoubleOr(f, "stereo_motion_min_disparity_px", m.min_disparity_px);
-  if (!(m.min_disparity_px >= 0))
-    throw InputError(f.path, lineOf(f.root["stereo_motion_min_disparity_px"]),
-                     "key 'stereo_motion_min_disparity_px': expected pixels >= 0 (0 = off), got " +
-                         std::to_string(m.min_disparity_px));
-  if (!(m.noise_ref >= 0))
-    throw InputError(f.path, lineOf(f.root["stereo_motion_noise_ref"]),
-                     "key 'stereo_motion_noise_ref': expected a chi2 >= 0 (0 = off), got " +
-                         std::to_string(m.noise_ref));
-  if (!(m.noise_quantile > 0 && m.noise_quantile < 1))
-    throw InputError(f.path, lineOf(f.root["stereo_motion_noise_quantile"]),
-                     "key 'stereo_motion_noise_quantile': expected a quantile in (0, 1), got " +
-                         std::to_string(m.noise_quantile));
-  checkPositive(f, "stereo_motion_chi2", m.chi2);
+  return true;
 }
 
-/// The IDY keys (DESIGN §4), all optional.
-void readDynamic(const YamlFile& f, const std::string& path, Config& c) {
-  c.dynamic.lambda_dy = getDoubleOr(f, "lambda_dy", 4.0);
-  c.dynamic.lambda_dy_c = getDoubleOr(f, "lambda_dy_c", 1.0);
-  if (f.root["confirm_outliers_dynamic"])
-    c.dynamic.confirm_outliers = getInt(f, f.root, "confirm_outliers_dynamic", "0 or 1") != 0;
-  readStereoMotion(f, c.dynamic.stereo);
-  if (f.root["lost_track_test"])
-    c.dynamic.lost_track_test = getInt(f, f.root, "lost_track_test", "0 or 1") != 0;
-  checkPositive(f, "stereo_motion_sigma_px", c.dynamic.stereo.sigma_px);
-  if (f.root["mode"]) {
-    const std::string m = getString(f, f.root, "mode", modeNames());
-    if (!parseMode(m, c.dynamic.mode))
-      throw InputError(path, lineOf(f.root["mode"]),
-                       "key 'mode': expected one of " + modeNames() + ", got '" + m + "'");
+/// Reads the declared keys present in the file (a required one missing throws) and checks
+/// their rules; absent optional keys keep the struct's defaults.
+class YamlLoader final : public ParamVisitor {
+ public:
+  explicit YamlLoader(const YamlFile& f) : f_(f) {}
+  void section(const char*) override {}
+  void param(const ParamKey& k, double& v) override {
+    if (present(k)) v = checked(k, getDouble(f_, f_.root, k.name, k.unit));
   }
-  if (c.dynamic.lambda_dy_c > c.dynamic.lambda_dy)
-    throw InputError(path, "lambda_dy_c (" + std::to_string(c.dynamic.lambda_dy_c) +
-                               ") must not exceed lambda_dy (" +
-                               std::to_string(c.dynamic.lambda_dy) + ")");
+  void param(const ParamKey& k, int& v) override {
+    if (present(k)) v = static_cast<int>(checked(k, getInt(f_, f_.root, k.name, k.unit)));
+  }
+  void param(const ParamKey& k, bool& v) override {
+    if (!present(k)) return;
+    const int i = getInt(f_, f_.root, k.name, "0 or 1");
+    if (i != 0 && i != 1)
+      throw InputError(f_.path, lineOf(f_.root[k.name]),
+                       "key '" + std::string(k.name) + "': expected 0 or 1, got " + std::to_string(i));
+    v = i == 1;
+  }
+  void param(const ParamKey& k, std::string& v) override {
+    if (present(k)) v = getString(f_, f_.root, k.name, k.unit);
+  }
+
+ private:
+  bool present(const ParamKey& k) const { return k.required || f_.root[k.name]; }
+  double checked(const ParamKey& k, double v) const {
+    if (!satisfies(v, k.rule)) {
+      std::ostringstream got;
+      got << v;
+      throw InputError(f_.path, lineOf(f_.root[k.name]),
+                       "key '" + std::string(k.name) + "': expected " + ruleText(k.rule) + " (" + k.unit +
+                           "), got " + got.str());
+    }
+    return v;
+  }
+  const YamlFile& f_;
+};
+
+/// The config's own keys beside the modules' structs: IMU noise, mode, bag topics. `mode`
+/// is visited as its name.
+void declareIoParams(ParamVisitor& v, Config& c, std::string& mode_name, const char* part) {
+  const std::string which(part);
+  if (which == "imu") {
+    v.section("IMU noise (VINS-Fusion semantics, docs/conventions.md)");
+    v.param({"acc_n", "m/s^2, accelerometer noise of one sample", ParamRule::kPositive, c.use_imu}, c.imu.acc_n);
+    v.param({"gyr_n", "rad/s, gyroscope noise of one sample", ParamRule::kPositive, c.use_imu}, c.imu.gyr_n);
+    v.param({"acc_w", "m/s^3, accelerometer bias random walk", ParamRule::kPositive, c.use_imu}, c.imu.acc_w);
+    v.param({"gyr_w", "rad/s^2, gyroscope bias random walk", ParamRule::kPositive, c.use_imu}, c.imu.gyr_w);
+    v.param({"g_norm", "m/s^2, gravity magnitude", ParamRule::kPositive, c.use_imu}, c.imu.g_norm);
+  } else if (which == "mode") {
+    v.section("Feature rejection mode (DESIGN §4.8)");
+    v.param({"mode", "baseline, ransac, seg, idy, idy-pre or idy-ba"}, mode_name);
+  } else {
+    v.section("ROS1 bag topics");
+    v.param({"imu_topic", "ROS topic"}, c.imu_topic);
+    v.param({"image0_topic", "ROS topic"}, c.image0_topic);
+    v.param({"image1_topic", "ROS topic"}, c.image1_topic);
+    v.param({"groundtruth_topic", "ROS topic, empty = none"}, c.groundtruth_topic);
+    v.param({"segmentation_topic", "ROS topic of VIODE's segmentation, empty = none"}, c.segmentation_topic);
+    v.param({"segmentation_rgb_ids", "VIODE's colour table, beside the config"}, c.segmentation_rgb_ids);
+    v.param({"segmentation_vehicle_ids", "VIODE's vehicle ids, beside the config"}, c.segmentation_vehicle_ids);
+  }
+}
+
+/// Every declared key, in the order saveConfig writes and describe prints them.
+void declareAll(ParamVisitor& v, Config& c, std::string& mode_name) {
+  declareIoParams(v, c, mode_name, "imu");
+  declareIoParams(v, c, mode_name, "mode");
+  c.tracker.declareParams(v);
+  c.estimator.declareParams(v);
+  c.idy.declareParams(v);
+  declareIoParams(v, c, mode_name, "topics");
+}
+
+/// Checks between keys, after they are read.
+void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
+  if (!parseMode(mode_name, c.mode))
+    throw InputError(f.path, lineOf(f.root["mode"]),
+                     "key 'mode': expected one of " + modeNames() + ", got '" + mode_name + "'");
+  if (c.idy.lambda_dy_c > c.idy.lambda_dy)
+    throw InputError(f.path, "lambda_dy_c (" + std::to_string(c.idy.lambda_dy_c) + ") must not exceed lambda_dy (" +
+                                 std::to_string(c.idy.lambda_dy) + ")");
+  const fs::path folder = fs::path(f.path).parent_path();
+  for (std::string* table : {&c.segmentation_rgb_ids, &c.segmentation_vehicle_ids})
+    if (!table->empty() && fs::path(*table).is_relative()) *table = (folder / *table).string();
+  if (!c.segmentation_topic.empty() && (c.segmentation_rgb_ids.empty() || c.segmentation_vehicle_ids.empty()))
+    throw InputError(f.path, lineOf(f.root["segmentation_topic"]),
+                     "segmentation_topic needs segmentation_rgb_ids and segmentation_vehicle_ids (VIODE's tables)");
 }
 
 }  // namespace
@@ -338,24 +338,10 @@ Config loadConfig(const std::string& path, std::vector<std::string>* keys_read) 
     throw InputError(path, lineOf(f.root["image_width"]), "expected a positive image size");
 
   readCameras(f, path, c);
-  readImuTrackerSolver(f, c);
-  if (f.root["estimate_td"]) c.estimate_td = getInt(f, f.root, "estimate_td", "0 or 1") != 0;
-  c.td_s = getDoubleOr(f, "td", 0.0);
-
-  readDynamic(f, path, c);
-  for (auto [key, value] : {std::pair<const char*, std::string*>{"imu_topic", &c.imu_topic},
-                            {"image0_topic", &c.image0_topic},
-                            {"image1_topic", &c.image1_topic},
-                            {"groundtruth_topic", &c.groundtruth_topic}})
-    if (f.root[key]) *value = getString(f, f.root, key, "a ROS topic name");
-  if (f.root["segmentation_topic"]) c.segmentation_topic = getString(f, f.root, "segmentation_topic", "a ROS topic name");
-  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
-  for (auto [key, value] : {std::pair<const char*, std::string*>{"segmentation_rgb_ids", &c.segmentation_rgb_ids},
-                            {"segmentation_vehicle_ids", &c.segmentation_vehicle_ids}})
-    if (f.root[key]) *value = (folder / getString(f, f.root, key, "a file next to the config")).string();
-  if (!c.segmentation_topic.empty() && (c.segmentation_rgb_ids.empty() || c.segmentation_vehicle_ids.empty()))
-    throw InputError(path, lineOf(f.root["segmentation_topic"]),
-                     "segmentation_topic needs segmentation_rgb_ids and segmentation_vehicle_ids (VIODE's tables)");
+  std::string mode_name = toString(c.mode);
+  YamlLoader loader(f);
+  declareAll(loader, c, mode_name);
+  checkTogether(f, mode_name, c);
   return c;
 }
 
@@ -380,67 +366,50 @@ void writeFile(const std::string& path, const std::string& text) {
   if (!out) throw InputError(path, "cannot write file");
 }
 
-/// key value lines of one group; a string value is quoted.
-struct KeyLines {
+/// "key: value" lines of every declared key under "# section" lines; strings quoted.
+class KeyPrinter final : public ParamVisitor {
+ public:
+  explicit KeyPrinter(std::string indent) : indent_(std::move(indent)) {}
+  void section(const char* title) override { text += "\n" + indent_ + "# " + title + "\n"; }
+  void param(const ParamKey& k, double& v) override { add(k, number(v)); }
+  void param(const ParamKey& k, int& v) override { add(k, std::to_string(v)); }
+  void param(const ParamKey& k, bool& v) override { add(k, v ? "1" : "0"); }
+  void param(const ParamKey& k, std::string& v) override { add(k, "\"" + v + "\""); }
   std::string text;
-  KeyLines& operator()(const char* key, double v) { return add(key, number(v)); }
-  KeyLines& operator()(const char* key, int v) { return add(key, std::to_string(v)); }
-  KeyLines& operator()(const char* key, bool v) { return add(key, v ? "1" : "0"); }
-  KeyLines& operator()(const char* key, const std::string& v) { return add(key, "\"" + v + "\""); }
-  KeyLines& add(const char* key, const std::string& v) {
-    text += std::string(key) + ": " + v + "\n";
-    return *this;
+
+ private:
+  void add(const ParamKey& k, const std::string& value) {
+    text += indent_ + k.name + ": " + value + "\n";
   }
+  std::string indent_;
 };
 
-/// Every key of the config but the cameras' and the extrinsics, in groups, as saveConfig
-/// writes them and describe prints them.
-std::vector<std::pair<std::string, KeyLines>> keyGroups(const Config& c) {
-  std::vector<std::pair<std::string, KeyLines>> g;
-  g.push_back({"IMU noise (VINS-Fusion semantics, docs/conventions.md)",
-                KeyLines()("acc_n", c.imu.acc_n)("gyr_n", c.imu.gyr_n)("acc_w", c.imu.acc_w)("gyr_w", c.imu.gyr_w)(
-                    "g_norm", c.imu.g_norm)});
-  const TrackerOptions& t = c.tracker;
-  g.push_back({"Feature tracker", KeyLines()("max_cnt", t.max_cnt)("min_dist", t.min_dist)("F_threshold", t.f_threshold)(
-                                      "flow_back", t.flow_back)("equalize", t.equalize)(
-                                      "stereo_gain_compensation", t.stereo_gain_compensation)(
-                                      "stereo_epipolar_px", t.stereo_epipolar_px)("stereo_refine", t.stereo_refine)});
-  const SolverOptions& s = c.solver;
-  g.push_back({"Sliding-window optimization",
-                KeyLines()("max_solver_time", s.max_solver_time_s)("max_num_iterations", s.max_num_iterations)(
-                    "keyframe_parallax", s.keyframe_parallax_px)("solver_time_limit", s.time_limited)(
-                    "solver_function_tolerance", s.function_tolerance)});
-  g.push_back({"Camera-IMU time offset: image stamp + td = IMU time (s)",
-                KeyLines()("estimate_td", c.estimate_td)("td", c.td_s)});
-  const DynamicOptions& d = c.dynamic;
-  const StereoMotionOptions& m = d.stereo;
-  g.push_back({"IDY-VINS", KeyLines()("mode", std::string(toString(d.mode)))("lambda_dy", d.lambda_dy)(
-                               "lambda_dy_c", d.lambda_dy_c)("confirm_outliers_dynamic", d.confirm_outliers)(
-                               "lost_track_test", d.lost_track_test)});
-  g.push_back({"IDY-VINS stereo motion test",
-                KeyLines()("stereo_motion_test", m.enabled)("stereo_motion_chi2", m.chi2)(
-                    "stereo_motion_sigma_px", m.sigma_px)("stereo_motion_strikes", m.strikes)(
-                    "stereo_motion_anchor_frames", m.anchor_frames)("stereo_motion_drift_mps", m.drift_mps)(
-                    "stereo_motion_remove_chi2", m.remove_chi2)("stereo_motion_persistent_strikes", m.persistent_strikes)(
-                    "stereo_motion_left_chi2", m.left_chi2)("stereo_motion_noise_ref", m.noise_ref)(
-                    "stereo_motion_noise_quantile", m.noise_quantile)(
-                    "stereo_motion_min_disparity_px", m.min_disparity_px)});
-  KeyLines topics;
-  topics("imu_topic", c.imu_topic)("image0_topic", c.image0_topic)("image1_topic", c.image1_topic);
-  if (!c.groundtruth_topic.empty()) topics("groundtruth_topic", c.groundtruth_topic);
-  if (!c.segmentation_topic.empty())
-    topics("segmentation_topic", c.segmentation_topic)("segmentation_rgb_ids", c.segmentation_rgb_ids)(
-        "segmentation_vehicle_ids", c.segmentation_vehicle_ids);
-  g.push_back({"ROS1 bag topics", topics});
-  return g;
+/// Every declared key of `c` as KeyPrinter lines.
+std::string keyLines(const Config& c, const std::string& indent) {
+  Config copy = c;  // visitors take references; printing changes nothing
+  std::string mode_name = toString(c.mode);
+  KeyPrinter printer(indent);
+  declareAll(printer, copy, mode_name);
+  return printer.text;
 }
 
-std::string indented(const std::string& lines, const std::string& indent) {
-  std::string out;
-  std::istringstream in(lines);
-  for (std::string line; std::getline(in, line);) out += indent + line + "\n";
-  return out;
-}
+/// Markdown tables of every key: default and unit, one table per section.
+class KeyTable final : public ParamVisitor {
+ public:
+  void section(const char* title) override {
+    text += std::string(text.empty() ? "" : "\n") + "**" + title + "**\n\n| key | default | unit and meaning |\n| --- | --- | --- |\n";
+  }
+  void param(const ParamKey& k, double& v) override { add(k, number(v)); }
+  void param(const ParamKey& k, int& v) override { add(k, std::to_string(v)); }
+  void param(const ParamKey& k, bool& v) override { add(k, v ? "1" : "0"); }
+  void param(const ParamKey& k, std::string& v) override { add(k, v.empty() ? "(none)" : "`" + v + "`"); }
+  std::string text;
+
+ private:
+  void add(const ParamKey& k, const std::string& value) {
+    text += "| `" + std::string(k.name) + "` | " + (k.required ? "required" : value) + " | " + k.unit + " |\n";
+  }
+};
 
 }  // namespace
 
@@ -461,11 +430,25 @@ std::string describe(const Config& c) {
     const Eigen::Isometry3d T_c0_c1 = c.T_b_c[0].inverse() * c.T_b_c[1];
     o << "  stereo baseline: " << T_c0_c1.translation().norm() << " m\n";
   }
-  for (const auto& [title, keys] : keyGroups(c)) o << "  # " << title << "\n" << indented(keys.text, "  ");
+  o << keyLines(c, "  ").substr(1);
   o << "  (max_solver_time "
-    << (c.solver.time_limited ? "applied: solver_time_limit 1, results depend on load" : "not applied: deterministic")
+    << (c.estimator.time_limited ? "applied: solver_time_limit 1, results depend on load" : "not applied: deterministic")
     << ")\n";
   return o.str();
+}
+
+void declareParams(ParamVisitor& visitor, Config& c) {
+  std::string mode_name = toString(c.mode);
+  declareAll(visitor, c, mode_name);
+  if (!parseMode(mode_name, c.mode)) throw InputError("mode", "expected one of " + modeNames() + ", got '" + mode_name + "'");
+}
+
+std::string keyTable() {
+  Config c;
+  std::string mode_name = toString(c.mode);
+  KeyTable table;
+  declareAll(table, c, mode_name);
+  return table.text;
 }
 
 void saveCameraFile(const camera::CameraParams& k, const std::string& path) {
@@ -504,7 +487,7 @@ void saveConfig(const Config& c, const std::string& path) {
   s += "image_width: " + std::to_string(c.image_width) + "\nimage_height: " + std::to_string(c.image_height) + "\n";
   s += "# VINS-Fusion's key, for its readers: idyvins keeps the extrinsics fixed\nestimate_extrinsic: 0\n";
   for (int i = 0; i < c.num_cam; ++i) s += "body_T_cam" + std::to_string(i) + ":" + matrixYaml(c.T_b_c.at(i).matrix());
-  for (const auto& [title, keys] : keyGroups(c)) s += "\n# " + title + "\n" + keys.text;
+  s += keyLines(c, "");
   writeFile(path, s);
 }
 

@@ -16,17 +16,13 @@ namespace idyvins::pipeline {
 /// True for the modes that run the IDY front-end filter (idy, idy-pre, idy-ba).
 bool usesIdyFilter(Mode mode);
 
-/// The mode's rejection filter built from the config: null for baseline.
-std::unique_ptr<frontend::FeatureFilter> makeFilter(Mode mode, const Config& config);
-
-/// Tracker settings of a mode: idy and idy-pre keep following eliminated features and,
-/// with `lost_track_test`, judge new corners lost in their second frame (DESIGN §4.9).
-frontend::TrackerParams trackerParamsFor(Mode mode, const Config& config);
+/// The rejection filter of config.mode: null for baseline.
+std::unique_ptr<frontend::FeatureFilter> makeFilter(const Config& config);
 
 /// Tracker + filter of one mode; one instance per sequence.
 class FrontEnd {
  public:
-  FrontEnd(const Config& config, Mode mode);
+  explicit FrontEnd(const Config& config);
   /// Tracks one stereo frame. `prior` is used by the IDY filter (invalid: frame unfiltered);
   /// in seg mode the frame's left_mask must be set (InputError otherwise).
   frontend::FeatureFrame track(const StereoFrame& frame, const frontend::MotionPrior& prior);

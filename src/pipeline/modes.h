@@ -1,5 +1,6 @@
 #pragma once
-// The one table from a mode (DESIGN §4.8, the paper's Table I rows) to what it switches on.
+// The one table from a mode (DESIGN §4.8, the paper's Table I rows) to what it switches on,
+// and the modules' parameters it gives for a config.
 
 #include "io/config.h"
 
@@ -20,5 +21,14 @@ struct ModeTraits {
 
 /// The row of `mode` in the table.
 const ModeTraits& traitsOf(Mode mode);
+
+/// The modules' parameters as config.mode runs them: the config's keys plus the fields the
+/// mode and the rig set (TrackerParams, EstimatorOptions and IdyOptions mark them).
+struct ModeOptions {
+  frontend::TrackerParams tracker;
+  backend::EstimatorOptions estimator;
+  dynamic::IdyOptions idy;
+};
+ModeOptions optionsFor(const Config& config);
 
 }  // namespace idyvins::pipeline

@@ -15,25 +15,22 @@
 namespace idyvins::pipeline {
 namespace {
 
-backend::EstimatorOptions estimatorOptionsFor(Mode mode, const Config& config) {
-  backend::EstimatorOptions o;
-  o.candidate_weights = o.post_process = traitsOf(mode).weights_and_post;  // DESIGN §4.5, §4.6
-  o.confirm_outliers = o.post_process && config.dynamic.confirm_outliers;           // DESIGN §4.9
-  return o;
-}
-
 const Config& checkedConfig(const Config& config) {
   if (!config.use_imu || config.num_cam != 2 || config.T_b_c.size() < 2)
     throw InputError(config.path, "idyvins runs stereo + IMU configs only (imu: 1, num_of_cam: 2)");
   return config;
 }
 
+/// Depth range (m, left camera) of the stereo points that enter the dynamic map: nearer is
+/// a degenerate triangulation, farther than stereo depth can place.
+constexpr double kDynamicMapMinDepthM = 0.1, kDynamicMapMaxDepthM = 80.0;
+
 /// A stereo point triangulated in front of the left camera, within the dynamic map's range.
 std::optional<Eigen::Vector3d> triangulateInRange(const Eigen::Isometry3d& T_w_c0, const Eigen::Isometry3d& T_w_c1,
                                                   const frontend::Feature& f) {
   const Eigen::Vector3d p_w = backend::triangulateTwoViews(T_w_c0, f.xy, T_w_c1, f.xy_right);
   const double z = (T_w_c0.inverse() * p_w).z();
-  if (z > 0.1 && z < 80.0) return p_w;
+  if (z > kDynamicMapMinDepthM && z < kDynamicMapMaxDepthM) return p_w;
   return std::nullopt;
 }
 
@@ -95,16 +92,16 @@ class System::Worker {
 
 System::System(const Config& config, const RunOptions& run)
     : config_(checkedConfig(config)),
-      mode_(config.dynamic.mode),
+      mode_(config.mode),
       run_(run),
-      front_end_(config_, mode_),
-      estimator_(config_, estimatorOptionsFor(mode_, config_)) {
+      front_end_(config_),
+      estimator_(config_.rig(), config_.imu, optionsFor(config_).estimator) {
   if (run_.feedback_delay != 0 && run_.feedback_delay != 1)
     throw std::invalid_argument("RunOptions::feedback_delay must be 0 or 1");
   if (run_.pipelined && run_.feedback_delay != 1)
     throw std::invalid_argument("a pipelined run needs RunOptions::feedback_delay 1");
   if (run_.pipelined) worker_ = std::make_unique<Worker>();
-  td_s_ = config_.td_s;
+  td_s_ = config_.estimator.td_s;
 }
 
 System::~System() = default;
@@ -271,7 +268,7 @@ Result System::finish() {
   }
   completeInFlight();
   summary_.td_s = td_s_;
-  summary_.td_estimated = config_.estimate_td;
+  summary_.td_estimated = config_.estimator.estimate_td;
   estimator_.flushMap();
   Result result;
   result.static_map = estimator_.staticMap();

@@ -111,7 +111,7 @@ class System {
  public:
   /// Frames that may wait for IMU samples before they are processed without them.
   static constexpr std::size_t kMaxPendingFrames = 20;
-  /// Mode from config.dynamic.mode. Throws InputError unless the config is stereo + IMU,
+  /// Mode from config.mode. Throws InputError unless the config is stereo + IMU,
   /// std::invalid_argument for inconsistent run options.
   explicit System(const Config& config, const RunOptions& run = {});
   ~System();

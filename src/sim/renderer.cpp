@@ -62,13 +62,14 @@ RenderOutput Renderer::render(const std::vector<Quad>& quads, const Eigen::Isome
   return out;
 }
 
-RenderOutput Renderer::renderRadiance(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c,
-                                      bool sky) const {
+Renderer::Hits Renderer::rasterize(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c) const {
   const int W = params_.width, H = params_.height;
   const std::size_t N = static_cast<std::size_t>(W) * H;
-  std::vector<float> zbuf(N, std::numeric_limits<float>::infinity());
-  std::vector<int> hit(N, -1);
-  std::vector<float> hs(N), ht(N), hfoot(N);
+  Hits h{std::vector<float>(N, std::numeric_limits<float>::infinity()), std::vector<int>(N, -1),
+         std::vector<float>(N), std::vector<float>(N), std::vector<float>(N)};
+  std::vector<float>& zbuf = h.zbuf;
+  std::vector<int>& hit = h.quad;
+  std::vector<float>&hs = h.s, &ht = h.t, &hfoot = h.footprint;
   const Eigen::Isometry3d T_c_w = T_w_c.inverse();
   const double f = 0.5 * (params_.fx + params_.fy);
   const double margin = max_distortion_px_ + 2.0;
@@ -116,7 +117,14 @@ RenderOutput Renderer::renderRadiance(const std::vector<Quad>& quads, const Eige
       }
     }
   }
+  return h;
+}
 
+RenderOutput Renderer::shade(const std::vector<Quad>& quads, const Hits& h, bool sky) const {
+  const int W = params_.width, H = params_.height;
+  const std::vector<float>& zbuf = h.zbuf;
+  const std::vector<int>& hit = h.quad;
+  const std::vector<float>&hs = h.s, &ht = h.t, &hfoot = h.footprint;
   RenderOutput out;
   out.image = cv::Mat(H, W, CV_32F);
   out.mask = cv::Mat::zeros(H, W, CV_8UC1);
@@ -146,6 +154,11 @@ RenderOutput Renderer::renderRadiance(const std::vector<Quad>& quads, const Eige
     }
   }
   return out;
+}
+
+RenderOutput Renderer::renderRadiance(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c,
+                                      bool sky) const {
+  return shade(quads, rasterize(quads, T_w_c), sky);
 }
 
 }  // namespace idyvins::sim

@@ -35,6 +35,17 @@ class Renderer {
   const camera::CameraParams& params() const { return params_; }
 
  private:
+  /// The nearest quad at each pixel: its index (-1: none), depth, surface coordinates and
+  /// the pixel's footprint on it.
+  struct Hits {
+    std::vector<float> zbuf;
+    std::vector<int> quad;
+    std::vector<float> s, t, footprint;
+  };
+  /// Z-buffer pass: every quad rasterized through the per-pixel rays.
+  Hits rasterize(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c) const;
+  /// Texture, albedo and contrast at each hit (sky or dark background elsewhere).
+  RenderOutput shade(const std::vector<Quad>& quads, const Hits& hits, bool sky) const;
   camera::CameraParams params_;
   std::unique_ptr<camera::CameraModel> model_;
   const TextureBank& textures_;

@@ -108,16 +108,14 @@ Config rigConfig(const SimOptions& options) {
   c.imu.gyr_w = m.gyro_random_walk * std::sqrt(rate);
   c.imu.g_norm = options.g_norm;
   if (options.family == Family::kValidation) validationRig(c);
-  c.tracker = TrackerOptions{150, 30, 1.0, true};
   // A real camera's config: right matches refined gain- and bias-invariantly (KLT's
-  // disparity is biased by brightness differences a global gain leaves, see TrackerOptions).
+  // disparity is biased by brightness differences a global gain leaves, see TrackerParams).
   c.tracker.stereo_refine = options.realism.enabled;
   // A real camera's noise, blur and exposure changes make young static tracks fail the
   // stereo motion test: on such images a repeated failure removes only above chi2 80 or
   // after 3 failures in a row (docs/real-images.md; clean images keep removing at the
   // first repeated failure, which their recall needs).
-  if (options.realism.enabled) c.dynamic.stereo.remove_chi2 = 80.0;
-  c.solver = SolverOptions{0.04, 8, 10.0};
+  if (options.realism.enabled) c.idy.stereo.remove_chi2 = 80.0;
   return c;
 }
 

@@ -96,11 +96,8 @@ void addVehicles(World& w, const std::vector<LaneSpec>& lanes, const std::vector
   }
 }
 
-World buildCity(const SceneOptions& o, const TextureBank& tex) {
-  World w;
-  w.scene = "city";
-  w.sky = true;
-  std::mt19937_64 rng(o.seed * 104729 + 11);
+/// The street canyon: ground, building blocks, parked cars, markers.
+void addCityStatics(World& w, std::mt19937_64& rng, const TextureBank& tex) {
   std::uniform_real_distribution<double> U(0.0, 1.0);
   w.statics.push_back(groundQuad(-80, 300, -80, 80, 0.0, tex.index(TextureKind::kGround, 0), true));
   const double half_street = 12.0;
@@ -139,8 +136,11 @@ World buildCity(const SceneOptions& o, const TextureBank& tex) {
     const Vector3d corner(side > 0 ? x : x + 2.4, y, 1.0);
     w.markers.push_back(makeMarker(corner, u, Vector3d::UnitZ(), tex));
   }
-  if (o.level == Level::kNone && !o.opening_vehicle) return w;
+}
 
+/// The street's traffic of a level (and the opening vehicle).
+void addCityTraffic(World& w, const SceneOptions& o, std::mt19937_64& rng, const TextureBank& tex) {
+  std::uniform_real_distribution<double> U(0.0, 1.0);
   // Lanes: along the street (right-hand traffic) and along the three cross streets.
   std::vector<LaneSpec> lanes = {{{-90, -5.5, 0}, {1, 0, 0}, 370}, {{-90, -2.5, 0}, {1, 0, 0}, 370},
                                  {{280, 2.5, 0}, {-1, 0, 0}, 370},  {{280, 5.5, 0}, {-1, 0, 0}, 370}};
@@ -180,16 +180,24 @@ World buildCity(const SceneOptions& o, const TextureBank& tex) {
     add(static_cast<int>(lanes.size()) - 1, "truck", 3.0, 6.0);
   }
   addVehicles(w, lanes, lane_of, types, speeds, offsets, tex);
+}
+
+World buildCity(const SceneOptions& o, const TextureBank& tex) {
+  World w;
+  w.scene = "city";
+  w.sky = true;
+  std::mt19937_64 rng(o.seed * 104729 + 11);
+  addCityStatics(w, rng, tex);
+  if (o.level == Level::kNone && !o.opening_vehicle) return w;
+  addCityTraffic(w, o, rng, tex);
   return w;
 }
 
 // Traffic loops in the garage (the drone flies the ellipse a = 14, b = 8 between them).
 constexpr double kInnerA = 11.8, kInnerB = 5.8, kOuterA = 16.2, kOuterB = 10.2;
 
-World buildParkingLot(const SceneOptions& o, const TextureBank& tex) {
-  World w;
-  w.scene = "parking_lot";
-  std::mt19937_64 rng(o.seed * 130363 + 5);
+/// The garage: floor, ceiling, walls, pillars, parked cars, markers.
+void addGarageStatics(World& w, std::mt19937_64& rng, const TextureBank& tex) {
   std::uniform_real_distribution<double> U(0.0, 1.0);
   const double X = 25, Y = 18, H = 3.2;
   // Floor, ceiling and walls of the garage (inward-facing box).
@@ -229,7 +237,11 @@ World buildParkingLot(const SceneOptions& o, const TextureBank& tex) {
     w.markers.push_back(makeMarker(Vector3d(X - 0.02, y + 2.4, 0.4), Vector3d(0, -1, 0), Vector3d::UnitZ(), tex));
     w.markers.push_back(makeMarker(Vector3d(-X + 0.02, y, 0.4), Vector3d(0, 1, 0), Vector3d::UnitZ(), tex));
   }
-  if (o.level == Level::kNone && !o.opening_vehicle) return w;
+}
+
+/// Traffic of a level on the garage's loops (and the opening vehicle).
+void addGarageTraffic(World& w, const SceneOptions& o, std::mt19937_64& rng, const TextureBank& tex) {
+  std::uniform_real_distribution<double> U(0.0, 1.0);
   // Traffic loops on an inner and an outer ellipse, 2.2 m from the drone's path.
   auto rnd = [&](double a, double b) { return a + (b - a) * U(rng); };
   auto add = [&](bool inner, double direction, const std::string& type, double speed, double offset) {
@@ -260,6 +272,15 @@ World buildParkingLot(const SceneOptions& o, const TextureBank& tex) {
     for (int i = 0; i < 5; ++i) add(false, i % 2 ? 1.0 : -1.0, i % 3 ? "car" : "van", rnd(3, 6), 18.0 * i + rnd(0, 6));
   }
   if (o.opening_vehicle) add(true, 1, "van", 3.0, 0.0);
+}
+
+World buildParkingLot(const SceneOptions& o, const TextureBank& tex) {
+  World w;
+  w.scene = "parking_lot";
+  std::mt19937_64 rng(o.seed * 130363 + 5);
+  addGarageStatics(w, rng, tex);
+  if (o.level == Level::kNone && !o.opening_vehicle) return w;
+  addGarageTraffic(w, o, rng, tex);
   return w;
 }
 

@@ -32,9 +32,9 @@ struct Quad {
 struct Vehicle {
   int id = 1;                  ///< object id in masks (1..255)
   std::string type;            ///< car, van, truck
-  Eigen::Vector3d size;        ///< length, width, height (m)
-  Eigen::Vector3d lane_start;  ///< lane start (ground point)
-  Eigen::Vector3d lane_dir;    ///< unit direction of travel
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();        ///< length, width, height (m)
+  Eigen::Vector3d lane_start = Eigen::Vector3d::Zero();  ///< lane start (ground point)
+  Eigen::Vector3d lane_dir = Eigen::Vector3d::Zero();    ///< unit direction of travel (zero on loops)
   double lane_length = 100;    ///< the vehicle wraps after this distance
   double speed = 5;            ///< m/s
   double offset = 0;           ///< position along the lane at t = 0 (m)

@@ -1,0 +1,79 @@
+#pragma once
+// The sliding-window estimator's parameters: the single place their defaults live, with
+// their config keys (core/params.h). VINS-Fusion's solver and time-offset keys keep their
+// names and meaning.
+
+#include "core/params.h"
+
+namespace idyvins::backend {
+
+struct EstimatorOptions {
+  // VINS-Fusion's solver keys.
+  /// Wall-clock cap per solve, seconds; applied only with time_limited.
+  double max_solver_time_s = 0.04;
+  int max_num_iterations = 8;
+  double keyframe_parallax_px = 10.0;  ///< mean parallax for a new keyframe, pixels
+  /// Cap each solve at max_solver_time_s of wall clock, as VINS-Fusion does, for live use.
+  /// Results then depend on machine load; off, solves stop on max_num_iterations and
+  /// Ceres' convergence tolerances only (deterministic).
+  bool time_limited = false;
+  /// A solve has converged when an iteration lowers the cost by less than this fraction of
+  /// it (Ceres' own default is 1e-6). Measured on the standard benchmark (docs/results.md):
+  /// idy's ATE equal or better on every sequence group, optimization 14–19 -> 12–13 ms per frame.
+  double function_tolerance = 1e-4;
+
+  // Camera–IMU time offset (VINS-Fusion's keys): image stamp + td = IMU time.
+  bool estimate_td = false;  ///< estimate td online in the window (DESIGN §4.11)
+  double td_s = 0.0;         ///< the offset, or its initial value with estimate_td, seconds
+
+  // Measurement model and window management.
+  double sigma_px = 1.5;                ///< pixel noise of projection factors
+  double huber_px = 1.0;                ///< Huber threshold on the whitened residual
+  double outlier_px = 3.0;              ///< mean reprojection error that removes a landmark
+  double init_rotation_check_deg = 3.0;  ///< PnP vs gyro disagreement that rejects an init frame
+  int min_pnp_points = 15;
+  int clear_after_observations = 4;  ///< a candidate that passes with this many observations becomes static
+
+  // Set by the mode (pipeline/modes.h), not config keys.
+  /// DESIGN §4.5: candidate observations weighted by 1/m_j, recomputed every solver
+  /// iteration from the current poses (modes idy, idy-ba).
+  bool candidate_weights = false;
+  /// DESIGN §4.6: confirm candidates as dynamic (leave the window) or clear them to static.
+  bool post_process = false;
+  /// Extension of §4.6 (dynamic::IdyOptions::confirm_outliers): a landmark removed by the
+  /// outlier test is confirmed dynamic (its track is ignored from then on, dynamic map)
+  /// instead of coming back as a new landmark from its next observation.
+  bool confirm_outliers = false;
+  /// Keep the oldest frame's yaw and position through each solve (backend/gauge.h); off in
+  /// tests of the free gauge only.
+  bool fix_gauge = true;
+
+  /// Declares every config key of the struct (load, print and save visit this list).
+  void declareParams(ParamVisitor& v) {
+    v.section("Sliding-window optimization (VINS-Fusion's keys)");
+    v.param({"max_solver_time", "s per solve, applied only with solver_time_limit 1", ParamRule::kPositive, true},
+            max_solver_time_s);
+    v.param({"max_num_iterations", "solver iterations per solve", ParamRule::kPositive, true}, max_num_iterations);
+    v.param({"keyframe_parallax", "px, mean parallax of a new keyframe", ParamRule::kPositive, true},
+            keyframe_parallax_px);
+    v.param({"solver_time_limit", "0/1, cap solves at max_solver_time (results depend on load)"}, time_limited);
+    v.param({"solver_function_tolerance", "relative cost decrease of convergence", ParamRule::kPositive},
+            function_tolerance);
+    v.section("Camera-IMU time offset: image stamp + td = IMU time (s)");
+    v.param({"estimate_td", "0/1, estimate td online"}, estimate_td);
+    v.param({"td", "s, the offset (initial value with estimate_td)"}, td_s);
+    v.section("Sliding-window measurement model");
+    v.param({"projection_sigma_px", "px, pixel noise of projection factors", ParamRule::kPositive}, sigma_px);
+    v.param({"projection_huber", "Huber threshold on the whitened residual", ParamRule::kPositive}, huber_px);
+    v.param({"outlier_px", "px, mean reprojection error that removes a landmark", ParamRule::kPositive},
+            outlier_px);
+    v.param({"init_rotation_check_deg", "deg, PnP vs gyro disagreement that rejects an init frame",
+             ParamRule::kPositive},
+            init_rotation_check_deg);
+    v.param({"min_pnp_points", "points of an initialization PnP", ParamRule::kPositive}, min_pnp_points);
+    v.param({"candidate_clear_observations", "passing observations that clear a candidate", ParamRule::kPositive},
+            clear_after_observations);
+  }
+};
+
+}  // namespace idyvins::backend

@@ -1,0 +1,95 @@
+#include "pipeline/outputs.h"
+
+#include "eval/trajectory_metrics.h"
+#include "io/ply.h"
+#include "io/trajectory_io.h"
+
+namespace idyvins::pipeline {
+namespace {
+
+std::vector<io::LabelledPoint> plyPoints(const std::vector<backend::MapPoint>& a,
+                                         const std::vector<backend::MapPoint>& b = {}) {
+  std::vector<io::LabelledPoint> out;
+  for (const auto* v : {&a, &b})
+    for (const auto& p : *v) out.push_back({p.p_w, io::plyLabel(p.label)});
+  return out;
+}
+
+/// Mean per solve of where the window solves spent their time (ms) and how they ended.
+nlohmann::json solveProfileJson(const Summary& s) {
+  const double n = static_cast<double>(std::max<std::size_t>(s.solves, 1));
+  const backend::SolveProfile& t = s.solve_sum;
+  return {{"solves", s.solves},
+          {"converged_fraction", s.solves_converged / n},
+          {"mean_iterations", t.iterations / n},
+          {"mean_build_ms", t.build_ms / n},
+          {"mean_preprocess_ms", t.preprocess_ms / n},
+          {"mean_residual_ms", t.residual_ms / n},
+          {"mean_jacobian_ms", t.jacobian_ms / n},
+          {"mean_linear_solver_ms", t.linear_solver_ms / n},
+          {"mean_minimizer_ms", t.minimizer_ms / n},
+          {"mean_post_ms", t.post_ms / n}};
+}
+
+}  // namespace
+
+void writeResultFiles(const std::string& out, const Result& r) {
+  io::writePly(out + "/map_static.ply", plyPoints(r.static_map));
+  io::writePly(out + "/map_dynamic.ply", plyPoints(r.dynamic_map));
+  io::writePly(out + "/map_all.ply", plyPoints(r.static_map, r.dynamic_map));
+  std::vector<StampedPose> poses;
+  std::vector<GroundTruthState> states;  // the full estimated state, written as state.csv
+  for (const auto& s : r.trajectory) {
+    poses.push_back(toStampedPose(s));
+    states.push_back({s.t_ns, s.state.p_w_b, s.state.q_w_b, s.state.v_w, s.state.bg, s.state.ba});
+  }
+  io::writeTum(out + "/trajectory.tum", poses);
+  io::writeEurocCsv(out + "/trajectory.csv", poses);
+  io::writeStateCsv(out + "/state.csv", states);
+}
+
+nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
+  const Summary& s = r.summary;
+  const double n = static_cast<double>(s.frames), seq_s = toSeconds(s.last_t_ns - s.first_t_ns);
+  nlohmann::json resets = nlohmann::json::array();
+  for (const auto& e : s.resets) resets.push_back({{"t_ns", e.t_ns}, {"frame", e.frame}, {"why", e.why}});
+  return {{"frames", s.frames},
+          {"mode", toString(mode)},
+          {"sequence_s", seq_s},
+          {"wall_s", wall_s},
+          {"realtime_factor", seq_s / wall_s},
+          {"mean_tracking_ms", s.sum_tracking_ms / n},
+          {"mean_filter_ms", s.sum_filter_ms / n},
+          {"mean_optimization_ms", s.sum_optimization_ms / n},
+          {"mean_marginalization_ms", s.sum_marginalization_ms / n},
+          {"solve_profile", solveProfileJson(s)},
+          {"poses", r.trajectory.size()},
+          {"initialized_at_s", s.init_t_ns >= 0 ? toSeconds(s.init_t_ns - s.first_t_ns) : -1.0},
+          {"frames_without_prior", s.frames_without_prior},
+          {"frames_beyond_imu", s.frames_beyond_imu},
+          {"td_s", s.td_s},
+          {"td_estimated", s.td_estimated},
+          {"lost_new_corners_tested", s.lost_tested},
+          {"lost_new_corners_moving", s.lost_moving},
+          {"map_static_points", r.static_map.size()},
+          {"map_dynamic_points", r.dynamic_map.size()},
+          {"classification", nullptr},
+          {"resets", resets}};
+}
+
+void addAte(nlohmann::json& summary, const std::vector<StampedPose>& gt, const Result& r) {
+  if (gt.empty() || r.trajectory.size() <= 2) return;
+  std::vector<StampedPose> est;
+  for (const auto& s : r.trajectory) est.push_back(toStampedPose(s));
+  try {
+    const auto ate = eval::computeAte(gt, est, eval::AlignMode::kSe3, 10'000'000);
+    std::vector<StampedPose> gt_pairs;
+    for (const auto& [i, j] : ate.pairs) gt_pairs.push_back(gt[i]);
+    summary["ate_rmse_m"] = ate.stats.rmse;
+    summary["path_length_m"] = eval::pathLength(gt_pairs);
+  } catch (const std::exception&) {  // no overlap with the ground truth: no ATE
+  }
+}
+
+
+}  // namespace idyvins::pipeline

@@ -1,0 +1,28 @@
+#pragma once
+// What a finished run leaves behind, for any embedder (the `idyvins run` command, a ROS
+// node, a test): the trajectory and map files and the run summary of stats.json.
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "pipeline/system.h"
+
+namespace idyvins::pipeline {
+
+/// Writes into the existing `folder`: trajectory.tum (TUM), trajectory.csv (EuRoC),
+/// state.csv (pose, velocity, biases in EuRoC's ground-truth columns), map_static.ply,
+/// map_dynamic.ply and map_all.ply (labelled points). Throws InputError when a file
+/// cannot be written.
+void writeResultFiles(const std::string& folder, const Result& result);
+
+/// The run summary (stats.json's "summary"): frames, timing per stage, solve profile,
+/// initialization, time offset, lost-corner counts, map sizes, resets; "classification"
+/// is null (pipeline::toJson of the observation recorder's figures goes there).
+nlohmann::json summaryJson(const Result& result, Mode mode, double wall_s);
+
+/// Adds ate_rmse_m (SE3 alignment, stamps associated within 10 ms) and path_length_m
+/// against `groundtruth` to `summary`; adds nothing when the two do not overlap.
+void addAte(nlohmann::json& summary, const std::vector<StampedPose>& groundtruth, const Result& result);
+
+}  // namespace idyvins::pipeline
