@@ -9,6 +9,9 @@
                                        PNG in docs/ is at most 200 KB
   docs_check.py periods ROOT           no line of README, docs, code, tests or scripts names a
                                        work period by number; history is named by commit
+  docs_check.py snippets ROOT          every ```cpp block of README.md and docs/*.md is a verbatim
+                                       excerpt (consecutive lines) of a file in docs/examples/, which
+                                       a test builds against the installed package
 
 Prints one line per problem and exits 1 if there is any.
 """
@@ -121,6 +124,27 @@ def check_periods(root):
     return problems, len(files)
 
 
+def check_snippets(root):
+    examples = {}
+    for path in sorted(glob.glob(os.path.join(root, "docs", "examples", "*.cpp"))):
+        examples[os.path.relpath(path, root)] = [l.rstrip() for l in open(path, encoding="utf-8")]
+    problems, n = [], 0
+    for doc in doc_files(root):
+        text = open(doc, encoding="utf-8").read()
+        for m in re.finditer(r"```cpp\n(.*?)```", text, flags=re.S):
+            n += 1
+            block = [l.rstrip() for l in m.group(1).rstrip("\n").split("\n")]
+            line = text[:m.start()].count("\n") + 1
+            # Lines may be dedented in the docs: compare without the common indentation.
+            def found_in(lines):
+                stripped = [l.strip() for l in lines]
+                want = [l.strip() for l in block]
+                return any(stripped[i:i + len(want)] == want for i in range(len(stripped) - len(want) + 1))
+            if not any(found_in(lines) for lines in examples.values()):
+                problems.append(f"{os.path.relpath(doc, root)}:{line}: C++ block is not an excerpt of docs/examples/*.cpp")
+    return problems, n
+
+
 def main():
     if len(sys.argv) < 3:
         print(__doc__)
@@ -135,6 +159,9 @@ def main():
     elif what == "periods":
         problems, n = check_periods(sys.argv[2])
         summary = f"{n} files"
+    elif what == "snippets":
+        problems, n = check_snippets(sys.argv[2])
+        summary = f"{n} C++ blocks"
     else:
         print(__doc__)
         return 2
