@@ -52,9 +52,17 @@ TEST(Cli, HelpForEverySubcommand) {
   }
 }
 
-TEST(Cli, NoSubcommandIsAUsageError) {
-  const Result r = run("");
-  EXPECT_NE(r.code, 0);
+TEST(Cli, UsageErrorsExitTwo) {
+  // docs/cli.md: usage errors exit 2 (CLI11's own codes are 101-120).
+  EXPECT_EQ(run("").code, 2);                                  // no subcommand
+  EXPECT_EQ(run("frobnicate").code, 2);                        // unknown subcommand
+  EXPECT_EQ(run("run --config c.yaml").code, 2);               // required options missing
+  EXPECT_EQ(run("run -c c.yaml -d d -o o --threads 3").code, 2);  // out of range
+  const Result frames = run("run -c c.yaml -d d -o o --frames -1");
+  EXPECT_EQ(frames.code, 2);
+  EXPECT_NE(frames.out.find("--frames"), std::string::npos) << frames.out;
+  EXPECT_EQ(run("track -c c.yaml -d d --frames -5").code, 2);
+  EXPECT_EQ(run("--version").code, 0);
 }
 
 TEST(Cli, InfoOnRealEurocExcerpt) {
@@ -83,6 +91,12 @@ TEST(Cli, BadInputIsOneLineAndNonZeroExit) {
   const Result r = run("info /nonexistent/dataset");
   EXPECT_EQ(r.code, 1);
   EXPECT_EQ(r.out, "error: /nonexistent/dataset: dataset folder does not exist\n");
+  const std::string empty_bag = ::testing::TempDir() + "/empty.bag";
+  { std::ofstream(empty_bag).flush(); }  // zero bytes
+  const Result e = run("info " + empty_bag);
+  EXPECT_EQ(e.code, 1);
+  EXPECT_EQ(e.out, "error: " + empty_bag +
+                       ": is a file, but neither a ROS1 bag (no '#ROSBAG V2.0' header) nor a EuRoC folder\n");
   const Result c = run("info " + kMicro + " --config /nonexistent/cfg.yaml");
   EXPECT_EQ(c.code, 1);
   EXPECT_EQ(c.out, "error: /nonexistent/cfg.yaml: cannot open file (missing or unreadable)\n");

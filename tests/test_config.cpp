@@ -394,6 +394,14 @@ TEST(Config, BadValuesNameKeyAndLine) {
   expectError([&] { loadConfig(path); }, "cfg.yaml:");
 }
 
+TEST(Config, AKeyWrittenTwiceIsRefused) {
+  TempDir dir;
+  const auto path = writeConfig(dir, std::string(kConfig) + "lambda_dy: 6\n", kCamera);  // kConfig has lambda_dy: 5
+  expectError([&] { loadConfig(path); }, "cfg.yaml:26: key 'lambda_dy' written twice (first at line 25)");
+  expectError([&] { loadConfig(writeConfig(dir, kConfig, std::string(kCamera) + "image_width: 64\n")); },
+              "cam.yaml:17: key 'image_width' written twice (first at line 5)");
+}
+
 TEST(Config, ModeNames) {
   Mode m{};
   for (const char* name : {"baseline", "ransac", "seg", "idy", "idy-pre", "idy-ba"}) {

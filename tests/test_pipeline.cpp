@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+#include <limits>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -35,7 +38,8 @@ struct SceneRun {
   std::size_t observed_frames = 0, outputs_with_pose = 0;
 };
 
-SceneRun runScene(Mode mode, double duration_s, const RunOptions& run_options = {}) {
+SceneRun runScene(Mode mode, double duration_s, const RunOptions& run_options = {},
+                  const std::function<void(std::vector<ImuSample>&)>& corrupt_imu = {}) {
   sim::SimOptions o;
   o.scene.scene = "city";
   o.scene.level = sim::Level::kHigh;
@@ -45,6 +49,7 @@ SceneRun runScene(Mode mode, double duration_s, const RunOptions& run_options = 
   std::vector<ImuSample> imu;
   std::vector<GroundTruthState> gt;
   sim::synthesizeImu(scene.trajectory(), o, imu, gt);
+  if (corrupt_imu) corrupt_imu(imu);
   Config config = scene.rig();
   config.estimator.max_solver_time_s = 1000;  // iterations, not the wall clock, end each solve
   config.mode = mode;
@@ -79,6 +84,42 @@ double ate(const SceneRun& run) {
   std::vector<StampedPose> est;
   for (const auto& s : run.result.trajectory) est.push_back(toStampedPose(s));
   return eval::computeAte(run.truth, est, eval::AlignMode::kSe3, 1'000'000).stats.rmse;
+}
+
+TEST(PipelineSystem, ImpossibleAndOutOfOrderImuSamplesAreDroppedAndCounted) {
+  // Spikes of 1e30 m/s², a NaN rate and a repeated stamp in a 4 s sequence: dropped,
+  // counted, and the run goes on as if those samples were missing.
+  const SceneRun clean = runScene(Mode::kBaseline, 4.0);
+  std::size_t spikes = 0;
+  const SceneRun faulty = runScene(Mode::kBaseline, 4.0, {}, [&](std::vector<ImuSample>& imu) {
+    for (std::size_t k = 101; k < imu.size(); k += 97, ++spikes) imu[k].acc_b.x() = 1e30;
+    imu[333].gyr_b.z() = std::numeric_limits<double>::quiet_NaN();
+    imu[400].gyr_b = Eigen::Vector3d(0, 0, 40.0);  // beyond 35 rad/s
+    imu.insert(imu.begin() + 500, imu[499]);       // the same stamp twice
+  });
+  EXPECT_EQ(clean.result.summary.imu_out_of_range + clean.result.summary.imu_out_of_order, 0u);
+  EXPECT_EQ(faulty.result.summary.imu_out_of_range, spikes + 2);
+  EXPECT_EQ(faulty.result.summary.imu_out_of_order, 1u);
+  for (const auto& r : faulty.result.summary.resets) ADD_FAILURE() << "reset at frame " << r.frame << ": " << r.why;
+  EXPECT_EQ(faulty.result.trajectory.size(), clean.result.trajectory.size());
+  EXPECT_LT(ate(faulty), 1.5 * ate(clean) + 0.005) << "clean " << ate(clean);
+}
+
+TEST(PipelineSystem, FramesBetweenImuSamplesAreReachedByInterpolation) {
+  // No IMU sample at any frame's stamp (an IMU not synchronized with the cameras): each
+  // frame waits for the next sample and is integrated to by interpolation, no reset.
+  const SceneRun clean = runScene(Mode::kBaseline, 4.0);
+  const SceneRun between = runScene(Mode::kBaseline, 4.0, {}, [](std::vector<ImuSample>& imu) {
+    std::vector<ImuSample> kept;
+    for (std::size_t k = 0; k < imu.size(); ++k)
+      if (k % 10 != 0) kept.push_back(imu[k]);  // 200 Hz IMU, 20 Hz frames: the samples at frame times
+    imu = kept;
+  });
+  for (const auto& r : between.result.summary.resets) ADD_FAILURE() << "reset at frame " << r.frame << ": " << r.why;
+  // The last frame: runScene feeds no IMU after it, and its own-time sample is gone.
+  EXPECT_EQ(between.result.summary.frames_beyond_imu, 1u);
+  EXPECT_GE(between.result.trajectory.size() + 5, clean.result.trajectory.size());  // measured 68 vs 71
+  EXPECT_LT(ate(between), 1.5 * ate(clean) + 0.005) << "clean " << ate(clean);
 }
 
 TEST(PipelineSystem, IdyThroughTheLibraryApiTracksTheTruthAndLabelsTheMovingTraffic) {

@@ -71,6 +71,11 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
     std::printf("not initialized: %s\n", s["last_status"].get<std::string>().c_str());
   if (s["td_estimated"].get<bool>())
     std::printf("camera-IMU time offset td estimated: %.3f ms at the end\n", 1e3 * s["td_s"].get<double>());
+  const auto& dropped = s["imu_samples_dropped"];
+  if (dropped["out_of_range"].get<std::size_t>() + dropped["out_of_order"].get<std::size_t>() > 0)
+    std::printf("warning: IMU samples dropped: %zu not finite or beyond imu_max_acc / imu_max_gyr, %zu not after "
+                "the previous sample's time\n",
+                dropped["out_of_range"].get<std::size_t>(), dropped["out_of_order"].get<std::size_t>());
   if (s["frames_beyond_imu"].get<std::size_t>() > 0)
     std::printf("warning: %zu frame(s) at the end not processed: their time (stamp + td) is after the last IMU sample\n",
                 s["frames_beyond_imu"].get<std::size_t>());
@@ -166,7 +171,8 @@ void registerRun(CLI::App& app, int& exit_code) {
                   "PointStamped), e.g. /odometry (VIODE), /vicon/firefly_sbx/firefly_sbx or /leica/position (EuRoC);\n"
                   "overrides the config's groundtruth_topic");
   cmd->add_option("--mode", a->mode, "overrides the config's mode: " + modeNames());
-  cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)");
+  cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--threads", a->threads,
                   "2 (default): pipelined, the front end of frame k+1 runs beside the back end of frame k (its\n"
                   "motion prior comes from the state of frame k-1 propagated with the IMU; deterministic, equal\n"

@@ -137,7 +137,8 @@ void registerTrack(CLI::App& app, int& exit_code) {
   cmd->add_option("-d,--dataset", a->dataset, "EuRoC folder or ROS1 bag (topics from the config)")->required();
   cmd->add_option("--mode", a->mode, "baseline | ransac | seg (seg reads mav0/cam0/mask/)");
   cmd->add_option("--save-tracks", a->save_tracks, "folder for the track images");
-  cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)");
+  cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--image-stats", a->image_stats,
                 "also measure the input images: brightness and its spread, exposure variation between\n"
                 "frames, gradient magnitudes, Shi-Tomasi corners, vignetting profile, right/left brightness");

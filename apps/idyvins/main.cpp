@@ -29,7 +29,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // CLI11 prints the message (and --help / --version their text, exit 0); every usage
+    // error exits 2, as docs/cli.md says (CLI11's own codes are 101-120).
+    return app.exit(e) == 0 ? kOk : kUsageError;
   } catch (const idyvins::InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kInputError;

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "core/error.h"
@@ -27,6 +28,8 @@ struct YamlFile {
   std::vector<std::string>* keys_read = nullptr;  ///< top-level keys read, when recorded
 };
 
+int lineOf(const YAML::Node& node) { return node.Mark().line + 1; }
+
 YamlFile loadYaml(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path, "cannot open file (missing or unreadable)");
@@ -43,10 +46,17 @@ YamlFile loadYaml(const std::string& path) {
     throw InputError(path, e.mark.line + 1, "YAML syntax error: " + e.msg);
   }
   if (!file.root.IsMap()) throw InputError(path, "expected a YAML map of keys");
+  // A key written twice would be read once, the other value silently ignored.
+  std::map<std::string, int> first_line;
+  for (const auto& kv : file.root) {
+    if (!kv.first.IsScalar()) continue;
+    const auto [it, fresh] = first_line.emplace(kv.first.Scalar(), lineOf(kv.first));
+    if (!fresh)
+      throw InputError(path, lineOf(kv.first),
+                       "key '" + kv.first.Scalar() + "' written twice (first at line " + std::to_string(it->second) + ")");
+  }
   return file;
 }
-
-int lineOf(const YAML::Node& node) { return node.Mark().line + 1; }
 
 YAML::Node require(const YamlFile& f, const YAML::Node& parent, const std::string& key,
                    const std::string& what) {
@@ -279,6 +289,10 @@ void declareIoParams(ParamVisitor& v, Config& c, std::string& mode_name, const c
     v.param({"acc_w", "m/s^3, accelerometer bias random walk", ParamRule::kPositive, c.use_imu}, c.imu.acc_w);
     v.param({"gyr_w", "rad/s^2, gyroscope bias random walk", ParamRule::kPositive, c.use_imu}, c.imu.gyr_w);
     v.param({"g_norm", "m/s^2, gravity magnitude", ParamRule::kPositive, c.use_imu}, c.imu.g_norm);
+    v.param({"imu_max_acc", "m/s^2, acceleration norm above which a sample is dropped (counted)", ParamRule::kPositive},
+            c.imu_max_acc_mps2);
+    v.param({"imu_max_gyr", "rad/s, angular rate norm above which a sample is dropped (counted)", ParamRule::kPositive},
+            c.imu_max_gyr_radps);
   } else if (which == "mode") {
     v.section("Feature rejection mode (DESIGN §4.8)");
     v.param({"mode", "baseline, ransac, seg, idy, idy-pre or idy-ba"}, mode_name);

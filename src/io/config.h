@@ -38,6 +38,10 @@ struct Config {
   std::vector<std::string> cam_paths;      ///< resolved camodocal file paths
   std::vector<Eigen::Isometry3d> T_b_c;    ///< body_T_camX: maps camera points into the body
   ImuNoise imu;
+  /// IMU samples beyond these (or not finite) are dropped and counted (pipeline::Summary):
+  /// a robot must live through a few impossible samples. Defaults: 16 g, 35 rad/s.
+  double imu_max_acc_mps2 = 16 * 9.80665;
+  double imu_max_gyr_radps = 35.0;
   Mode mode = Mode::kIdy;            ///< `mode`; what it switches on: pipeline/modes.h
   frontend::TrackerParams tracker;   ///< feature tracker keys
   backend::EstimatorOptions estimator;  ///< solver, time offset and measurement-model keys

@@ -33,6 +33,8 @@ Eigen::Vector3d vec3(const TableRow& r, int first, const std::string& path) {
 
 std::string resolveMav0(const std::string& dir) {
   const fs::path p(dir);
+  if (fs::exists(p) && !fs::is_directory(p))
+    throw InputError(dir, "is a file, but neither a ROS1 bag (no '#ROSBAG V2.0' header) nor a EuRoC folder");
   if (!fs::is_directory(p)) throw InputError(dir, "dataset folder does not exist");
   if (fs::is_directory(p / "mav0")) return (p / "mav0").string();
   if (fs::is_directory(p / "cam0")) return p.string();

@@ -67,6 +67,7 @@ nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
           {"initialized_at_s", s.init_t_ns >= 0 ? toSeconds(s.init_t_ns - s.first_t_ns) : -1.0},
           {"frames_without_prior", s.frames_without_prior},
           {"frames_beyond_imu", s.frames_beyond_imu},
+          {"imu_samples_dropped", {{"out_of_range", s.imu_out_of_range}, {"out_of_order", s.imu_out_of_order}}},
           {"td_s", s.td_s},
           {"td_estimated", s.td_estimated},
           {"lost_new_corners_tested", s.lost_tested},

@@ -107,7 +107,15 @@ System::System(const Config& config, const RunOptions& run)
 System::~System() = default;
 
 void System::addImu(const ImuSample& sample) {
-  if (!imu_.empty() && sample.t_ns <= imu_.back().t_ns) return;  // as the estimator: strictly increasing
+  if (!imu_.empty() && sample.t_ns <= imu_.back().t_ns) {  // as the estimator: strictly increasing
+    ++summary_.imu_out_of_order;
+    return;
+  }
+  if (!sample.acc_b.allFinite() || !sample.gyr_b.allFinite() || sample.acc_b.norm() > config_.imu_max_acc_mps2 ||
+      sample.gyr_b.norm() > config_.imu_max_gyr_radps) {
+    ++summary_.imu_out_of_range;
+    return;
+  }
   imu_.push_back(sample);
 }
 
@@ -128,6 +136,10 @@ frontend::MotionPrior System::priorFor(TimeNs t_prev, TimeNs t_cur) const {
 
 const FrameOutput* System::addFrame(const StereoFrame& frame) {
   done_.reset();
+  // Checked on arrival (the frame may wait for IMU samples before it is processed).
+  if (traitsOf(mode_).needs_masks && frame.left_mask.empty())
+    throw InputError("frame " + std::to_string(frame.t_ns),
+                     std::string("mode ") + toString(mode_) + " needs the left image's ground-truth mask");
   pending_.push_back(frame);  // images are reference-counted: no copy
   while (!pending_.empty() && (imuCovers(pending_.front()) || pending_.size() > kMaxPendingFrames)) {
     process(pending_.front());
@@ -141,9 +153,9 @@ TimeNs System::imuTime(const StereoFrame& frame) const {
 }
 
 bool System::imuCovers(const StereoFrame& frame) const {
-  const TimeNs t = imuTime(frame);
-  // Samples come in stamp order with the frames: up to the image stamp they are all here.
-  return t <= frame.t_ns || (!imu_.empty() && imu_.back().t_ns >= t);
+  // The estimator integrates to the frame's time: a sample at or after it must be here
+  // (a frame between two samples, or whose own-time sample was dropped, waits for the next).
+  return !imu_.empty() && imu_.back().t_ns >= imuTime(frame);
 }
 
 void System::process(const StereoFrame& frame) {

@@ -65,6 +65,9 @@ struct Summary {
   std::size_t frames = 0;
   /// Frames left unprocessed at finish(): their time on the IMU clock (stamp + td) is after the last IMU sample.
   std::size_t frames_beyond_imu = 0;
+  /// IMU samples dropped by addImu: not finite or beyond imu_max_acc / imu_max_gyr, and
+  /// stamped at or before the previous sample.
+  std::size_t imu_out_of_range = 0, imu_out_of_order = 0;
   double td_s = 0;            ///< camera–IMU time offset at the end (the config's td unless estimated)
   bool td_estimated = false;  ///< the config's estimate_td
   TimeNs first_t_ns = 0, last_t_ns = 0;  ///< time stamps of the first and last frame
