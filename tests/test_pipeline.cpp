@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <limits>
 
@@ -14,6 +16,7 @@
 #include "eval/trajectory_metrics.h"
 #include "pipeline/modes.h"
 #include "pipeline/observers.h"
+#include "pipeline/outputs.h"
 #include "pipeline/system.h"
 #include "sim/simulator.h"
 
@@ -346,6 +349,37 @@ TEST(PipelineSystem, RejectsConfigsAndFramesItCannotRun) {
   EXPECT_THROW(seg.addFrame(frame), InputError) << "seg mode without a mask";
   EXPECT_THROW((System{sim::rigConfig(o), RunOptions{true, 0}}), std::invalid_argument)
       << "a pipelined run has a feedback delay of one frame";
+}
+
+TEST(Outputs, FilesAreWrittenUnderATemporaryNameAndRenamedWhenComplete) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(::testing::TempDir()) / "idyvins_outputs";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "trajectory.tum") << "old run\n";
+  Result r;
+  for (int k = 0; k < 3; ++k) {
+    StampedState s;
+    s.t_ns = 1'000'000'000 + k * 50'000'000;
+    s.state.p_w_b = Eigen::Vector3d(k, 0, 0);
+    r.trajectory.push_back(s);
+  }
+  writeResultFiles(dir.string(), r);
+  auto text = [&](const char* name) {
+    std::ifstream in(dir / name);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string tum = text("trajectory.tum");  // a header line and the new run's three poses
+  EXPECT_EQ(tum.find("old run"), std::string::npos) << tum;
+  EXPECT_EQ(std::count(tum.begin(), tum.end(), '\n'), 4) << tum;
+  for (const auto& e : fs::directory_iterator(dir)) EXPECT_NE(e.path().extension(), ".part") << e.path();
+  // A write that fails (here: its temporary name is taken by a folder) throws and leaves
+  // the file under the final name as it was, never cut.
+  std::ofstream(dir / "trajectory.tum") << "old run\n";
+  fs::create_directories(dir / "trajectory.tum.part" / "x");
+  EXPECT_THROW(writeResultFiles(dir.string(), r), InputError);
+  EXPECT_EQ(text("trajectory.tum"), "old run\n");
+  fs::remove_all(dir);
 }
 
 TEST(StatsRecorder, WritesOneLinePerFrameAndAParseableDocument) {

@@ -1,5 +1,9 @@
 #include "pipeline/outputs.h"
 
+#include <filesystem>
+#include <functional>
+
+#include "core/error.h"
 #include "eval/trajectory_metrics.h"
 #include "io/ply.h"
 #include "io/trajectory_io.h"
@@ -34,18 +38,27 @@ nlohmann::json solveProfileJson(const Summary& s) {
 }  // namespace
 
 void writeResultFiles(const std::string& out, const Result& r) {
-  io::writePly(out + "/map_static.ply", plyPoints(r.static_map));
-  io::writePly(out + "/map_dynamic.ply", plyPoints(r.dynamic_map));
-  io::writePly(out + "/map_all.ply", plyPoints(r.static_map, r.dynamic_map));
+  // Each file is written under a temporary name and renamed when complete: a run stopped
+  // while writing never leaves a cut file under a final name.
+  const auto atomically = [&out](const std::string& name, const std::function<void(const std::string&)>& write) {
+    const std::string path = out + "/" + name, part = path + ".part";
+    write(part);
+    std::error_code ec;
+    std::filesystem::rename(part, path, ec);
+    if (ec) throw InputError(path, "cannot rename " + part + ": " + ec.message());
+  };
   std::vector<StampedPose> poses;
   std::vector<GroundTruthState> states;  // the full estimated state, written as state.csv
   for (const auto& s : r.trajectory) {
     poses.push_back(toStampedPose(s));
     states.push_back({s.t_ns, s.state.p_w_b, s.state.q_w_b, s.state.v_w, s.state.bg, s.state.ba});
   }
-  io::writeTum(out + "/trajectory.tum", poses);
-  io::writeEurocCsv(out + "/trajectory.csv", poses);
-  io::writeStateCsv(out + "/state.csv", states);
+  atomically("map_static.ply", [&](const std::string& p) { io::writePly(p, plyPoints(r.static_map)); });
+  atomically("map_dynamic.ply", [&](const std::string& p) { io::writePly(p, plyPoints(r.dynamic_map)); });
+  atomically("map_all.ply", [&](const std::string& p) { io::writePly(p, plyPoints(r.static_map, r.dynamic_map)); });
+  atomically("trajectory.tum", [&](const std::string& p) { io::writeTum(p, poses); });
+  atomically("trajectory.csv", [&](const std::string& p) { io::writeEurocCsv(p, poses); });
+  atomically("state.csv", [&](const std::string& p) { io::writeStateCsv(p, states); });
 }
 
 nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {

@@ -12,8 +12,8 @@ namespace idyvins::pipeline {
 
 /// Writes into the existing `folder`: trajectory.tum (TUM), trajectory.csv (EuRoC),
 /// state.csv (pose, velocity, biases in EuRoC's ground-truth columns), map_static.ply,
-/// map_dynamic.ply and map_all.ply (labelled points). Throws InputError when a file
-/// cannot be written.
+/// map_dynamic.ply and map_all.ply (labelled points); each under NAME.part first, renamed
+/// when complete. Throws InputError when a file cannot be written.
 void writeResultFiles(const std::string& folder, const Result& result);
 
 /// The run summary (stats.json's "summary"): frames, timing per stage, solve profile,
