@@ -278,44 +278,46 @@ class YamlLoader final : public ParamVisitor {
   const YamlFile& f_;
 };
 
-/// The config's own keys beside the modules' structs: IMU noise, mode, bag topics. `mode`
-/// is visited as its name.
-void declareIoParams(ParamVisitor& v, Config& c, std::string& mode_name, const char* part) {
-  const std::string which(part);
-  if (which == "imu") {
-    v.section("IMU noise (VINS-Fusion semantics, docs/conventions.md)");
-    v.param({"acc_n", "m/s^2, accelerometer noise of one sample", ParamRule::kPositive, c.use_imu}, c.imu.acc_n);
-    v.param({"gyr_n", "rad/s, gyroscope noise of one sample", ParamRule::kPositive, c.use_imu}, c.imu.gyr_n);
-    v.param({"acc_w", "m/s^3, accelerometer bias random walk", ParamRule::kPositive, c.use_imu}, c.imu.acc_w);
-    v.param({"gyr_w", "rad/s^2, gyroscope bias random walk", ParamRule::kPositive, c.use_imu}, c.imu.gyr_w);
-    v.param({"g_norm", "m/s^2, gravity magnitude", ParamRule::kPositive, c.use_imu}, c.imu.g_norm);
-    v.param({"imu_max_acc", "m/s^2, acceleration norm above which a sample is dropped (counted)", ParamRule::kPositive},
-            c.imu_max_acc_mps2);
-    v.param({"imu_max_gyr", "rad/s, angular rate norm above which a sample is dropped (counted)", ParamRule::kPositive},
-            c.imu_max_gyr_radps);
-  } else if (which == "mode") {
-    v.section("Feature rejection mode (DESIGN §4.8)");
-    v.param({"mode", "baseline, ransac, seg, idy, idy-pre or idy-ba"}, mode_name);
-  } else {
-    v.section("ROS1 bag topics");
-    v.param({"imu_topic", "ROS topic"}, c.imu_topic);
-    v.param({"image0_topic", "ROS topic"}, c.image0_topic);
-    v.param({"image1_topic", "ROS topic"}, c.image1_topic);
-    v.param({"groundtruth_topic", "ROS topic, empty = none"}, c.groundtruth_topic);
-    v.param({"segmentation_topic", "ROS topic of VIODE's segmentation, empty = none"}, c.segmentation_topic);
-    v.param({"segmentation_rgb_ids", "VIODE's colour table, beside the config"}, c.segmentation_rgb_ids);
-    v.param({"segmentation_vehicle_ids", "VIODE's vehicle ids, beside the config"}, c.segmentation_vehicle_ids);
-  }
+/// The config's own keys beside the modules' structs: IMU noise and limits.
+void declareImuParams(ParamVisitor& v, Config& c) {
+  v.section("IMU noise (VINS-Fusion semantics, docs/conventions.md)");
+  v.param({"acc_n", "m/s^2, accelerometer noise of one sample", ParamRule::kPositive, c.use_imu}, c.imu.acc_n);
+  v.param({"gyr_n", "rad/s, gyroscope noise of one sample", ParamRule::kPositive, c.use_imu}, c.imu.gyr_n);
+  v.param({"acc_w", "m/s^3, accelerometer bias random walk", ParamRule::kPositive, c.use_imu}, c.imu.acc_w);
+  v.param({"gyr_w", "rad/s^2, gyroscope bias random walk", ParamRule::kPositive, c.use_imu}, c.imu.gyr_w);
+  v.param({"g_norm", "m/s^2, gravity magnitude", ParamRule::kPositive, c.use_imu}, c.imu.g_norm);
+  v.param({"imu_max_acc", "m/s^2, acceleration norm above which a sample is dropped (counted)", ParamRule::kPositive},
+          c.imu_max_acc_mps2);
+  v.param({"imu_max_gyr", "rad/s, angular rate norm above which a sample is dropped (counted)", ParamRule::kPositive},
+          c.imu_max_gyr_radps);
+}
+
+/// The mode, visited as its name.
+void declareModeParam(ParamVisitor& v, std::string& mode_name) {
+  v.section("Feature rejection mode (DESIGN §4.8)");
+  v.param({"mode", "baseline, ransac, seg, idy, idy-pre or idy-ba"}, mode_name);
+}
+
+/// The bag topics and VIODE's segmentation tables.
+void declareTopicParams(ParamVisitor& v, Config& c) {
+  v.section("ROS1 bag topics");
+  v.param({"imu_topic", "ROS topic"}, c.imu_topic);
+  v.param({"image0_topic", "ROS topic"}, c.image0_topic);
+  v.param({"image1_topic", "ROS topic"}, c.image1_topic);
+  v.param({"groundtruth_topic", "ROS topic, empty = none"}, c.groundtruth_topic);
+  v.param({"segmentation_topic", "ROS topic of VIODE's segmentation, empty = none"}, c.segmentation_topic);
+  v.param({"segmentation_rgb_ids", "VIODE's colour table, beside the config"}, c.segmentation_rgb_ids);
+  v.param({"segmentation_vehicle_ids", "VIODE's vehicle ids, beside the config"}, c.segmentation_vehicle_ids);
 }
 
 /// Every declared key, in the order saveConfig writes and describe prints them.
 void declareAll(ParamVisitor& v, Config& c, std::string& mode_name) {
-  declareIoParams(v, c, mode_name, "imu");
-  declareIoParams(v, c, mode_name, "mode");
+  declareImuParams(v, c);
+  declareModeParam(v, mode_name);
   c.tracker.declareParams(v);
   c.estimator.declareParams(v);
   c.idy.declareParams(v);
-  declareIoParams(v, c, mode_name, "topics");
+  declareTopicParams(v, c);
 }
 
 /// Checks between keys, after they are read.
