@@ -14,6 +14,8 @@ PACKAGES=(
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
   libclass-loader-dev librcpputils-dev librcutils-dev libament-index-cpp-dev
   python3-rosbag python3-sensor-msgs python3-nav-msgs python3-geometry-msgs
+  # the ROS1 node idyvins_ros and its test: roscpp, tf2, cv_bridge, roscore, rosbag play / record
+  libroscpp-dev libtf2-ros-dev libcv-bridge-dev libstd-msgs-dev ros-core python3-rospy python3-rosgraph
 )
 
 missing=()

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Checks house rules on the code (docs/architecture.md, ../shared/STYLE.md).
 
-  code_check.py functions ROOT  no function in src/ and apps/ is longer than 60 lines
+  code_check.py functions ROOT  no function in src/, apps/ and ros/ is longer than 60 lines
                                 (signature to closing brace; lambdas count in their function)
-  code_check.py history ROOT    no comment in src/ and apps/ names a commit (7-40 hex digits
+  code_check.py history ROOT    no comment in src/, apps/ and ros/ names a commit (7-40 hex digits
                                 with a letter): history belongs in commit messages and docs/
 
 Prints one line per problem and exits 1 if there is any.
@@ -20,7 +20,7 @@ OPENS_BODY = re.compile(r"\)\s*(const)?\s*(override)?\s*(noexcept)?\s*(->\s*[\w:
 
 def code_files(root):
     files = []
-    for folder in ("src", "apps"):
+    for folder in ("src", "apps", "ros"):
         for ext in ("cpp", "h"):
             files += glob.glob(os.path.join(root, folder, "**", "*." + ext), recursive=True)
     return sorted(files)

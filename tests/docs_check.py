@@ -37,6 +37,7 @@ def command_texts(text):
     found = []
     for chunk in chunks:
         chunk = chunk.split("#")[0] if not chunk.lstrip().startswith("#include") else ""
+        chunk = re.sub(r"\b(roslaunch|rospack|rosrun) idyvins\b", r"\1 IDYVINS_ROS_PACKAGE", chunk)  # the ROS package
         for m in re.finditer(r"(?:^|[\s/])idyvins (?!::)([a-z][a-z-]*)\b(.*?)(?=(?:[\s/]idyvins )|$)", chunk):
             found.append((m.group(1), m.group(2)))
     return found

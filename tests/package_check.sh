@@ -39,4 +39,12 @@ lines=$(wc -l < "$WORK/lib/trajectory.tum")
 [ "$lines" -gt 20 ] || { echo "trajectory too short: $lines poses"; exit 1; }
 /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert len(d['frames']) > 50, len(d['frames'])" \
   "$WORK/lib/stats.json"
+# The ROS package, when the node was built: roslaunch finds it in the installed tree.
+if [ -x "$PREFIX/lib/idyvins/idyvins_ros" ]; then
+  args=$(ROS_PACKAGE_PATH="$PREFIX/share" roslaunch --args idyvins "$PREFIX/share/idyvins/launch/idyvins.launch" \
+         config:=/c.yaml 2>&1) || { echo "roslaunch cannot start the installed node: $args"; exit 1; }
+  case "$args" in *share/idyvins/idyvins_ros*) ;; *) echo "roslaunch: unexpected command: $args"; exit 1;; esac
+  /usr/bin/python3 -c "import yaml,sys; d=yaml.safe_load(open(sys.argv[1])); assert d['Visualization Manager']['Global Options']['Fixed Frame']=='world'" \
+    "$PREFIX/share/idyvins/rviz/idyvins.rviz"
+fi
 echo "package check: installed $(du -sh "$PREFIX" | cut -f1); consumer and pkg-config builds; $lines poses identical to idyvins run"

@@ -17,21 +17,25 @@
 #include "pipeline/modes.h"
 #include "pipeline/observers.h"
 #include "pipeline/outputs.h"
+#include "pipeline/stereo_sync.h"
 #include "pipeline/system.h"
 #include "sim/simulator.h"
 
 namespace idyvins::pipeline {
 namespace {
 
-/// Counts the frames it sees and checks they come in order, once each.
+/// Counts the frames it sees and checks they come in order, once each; keeps the static
+/// points each frame gives.
 class OrderObserver final : public FrameObserver {
  public:
   void onFrame(const StereoFrame& input, const FrameOutput& out) override {
     EXPECT_EQ(out.index, frames);
     EXPECT_EQ(out.t_ns, input.t_ns);
     ++frames;
+    streamed_static.insert(streamed_static.end(), out.new_static_points.begin(), out.new_static_points.end());
   }
   std::size_t frames = 0;
+  std::vector<backend::MapPoint> streamed_static;
 };
 
 struct SceneRun {
@@ -39,10 +43,15 @@ struct SceneRun {
   eval::DynamicClassification classification;
   std::vector<StampedPose> truth;
   std::size_t observed_frames = 0, outputs_with_pose = 0;
+  std::size_t polled = 0;  ///< frames System::poll() processed
+  std::vector<backend::MapPoint> streamed_static;  ///< FrameOutput::new_static_points, in order
 };
 
+/// Runs a rendered city-high sequence. Offline order: each frame after the IMU samples up
+/// to its stamp. `live`: as a driver whose images come before the IMU: each frame before
+/// those samples, System::poll() after every sample.
 SceneRun runScene(Mode mode, double duration_s, const RunOptions& run_options = {},
-                  const std::function<void(std::vector<ImuSample>&)>& corrupt_imu = {}) {
+                  const std::function<void(std::vector<ImuSample>&)>& corrupt_imu = {}, bool live = false) {
   sim::SimOptions o;
   o.scene.scene = "city";
   o.scene.level = sim::Level::kHigh;
@@ -66,7 +75,13 @@ SceneRun runScene(Mode mode, double duration_s, const RunOptions& run_options = 
   std::size_t next_imu = 0;
   for (std::size_t k = 0; k < scene.frameCount(); ++k) {
     const sim::SceneFrame f = scene.renderFrame(k);
-    while (next_imu < imu.size() && imu[next_imu].t_ns <= f.t_ns) system.addImu(imu[next_imu++]);
+    auto imuUpTo = [&](TimeNs t) {
+      while (next_imu < imu.size() && imu[next_imu].t_ns <= t) {
+        system.addImu(imu[next_imu++]);
+        if (live) run.polled += system.poll();
+      }
+    };
+    if (!live) imuUpTo(f.t_ns);
     StereoFrame frame;
     frame.t_ns = f.t_ns;
     frame.index = k;
@@ -75,11 +90,13 @@ SceneRun runScene(Mode mode, double duration_s, const RunOptions& run_options = 
     frame.left_mask = f.cam[0].mask;
     const FrameOutput* out = system.addFrame(frame);
     if (out && out->estimate.initialized) ++run.outputs_with_pose;
+    if (live) imuUpTo(f.t_ns);
   }
   for (const auto& g : gt) run.truth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
   run.result = system.finish();
   run.classification = recorder.classify(run.result);
   run.observed_frames = order.frames;
+  run.streamed_static = std::move(order.streamed_static);
   return run;
 }
 
@@ -201,6 +218,26 @@ TEST(PipelineSystem, PipelinedRunEqualsTheSequentialRunWithTheSameFeedbackDelay)
   std::printf("feedback delay 0 / 1: ATE %.4f / %.4f m, moving flagged %.1f / %.1f %%, static flagged %.2f / %.2f %%\n",
               ate(zero), ate(one), 100 * zero.classification.recall, 100 * one.classification.recall,
               100 * zero.classification.static_flagged, 100 * one.classification.static_flagged);
+}
+
+TEST(PipelineSystem, PollProcessesAWaitingFrameAsSoonAsItsImuIsHereWithTheSameOutputs) {
+  // Images before their IMU samples, as a live driver may get them: each frame waits in the
+  // system until poll() after the sample at its stamp processes it. The outputs are those
+  // of the offline order, bit for bit.
+  const SceneRun offline = runScene(Mode::kIdy, 4.0, RunOptions::twoThreads());
+  const SceneRun live = runScene(Mode::kIdy, 4.0, RunOptions::twoThreads(), {}, /*live=*/true);
+  EXPECT_EQ(offline.polled, 0u);
+  EXPECT_EQ(live.polled, 81u) << "every frame processed by poll(), none held until the next frame";
+  EXPECT_TRUE(sameTrajectory(offline.result, live.result));
+  EXPECT_TRUE(sameMap(offline.result.static_map, live.result.static_map));
+  EXPECT_TRUE(sameMap(offline.result.dynamic_map, live.result.dynamic_map));
+  EXPECT_GT(live.result.trajectory.size(), 60u);
+  // The static points given frame by frame are the static map but for the landmarks still in
+  // the window at the end (finish() adds those).
+  const auto& map = live.result.static_map;
+  ASSERT_GT(live.streamed_static.size(), 50u);
+  ASSERT_LT(live.streamed_static.size(), map.size());
+  EXPECT_TRUE(sameMap(live.streamed_static, {map.begin(), map.begin() + live.streamed_static.size()}));
 }
 
 /// A walked static street rendered once: frames stamped with an image clock td_true behind
@@ -401,6 +438,57 @@ TEST(StatsRecorder, WritesOneLinePerFrameAndAParseableDocument) {
     const std::string text = os.str();
     EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), n ? n + 10 : 9) << text;
   }
+}
+
+cv::Mat grayOf(int value) { return cv::Mat(4, 4, CV_8UC1, cv::Scalar(value)); }
+
+TEST(StereoSync, PairsImagesByStampInWhicheverOrderTheyArrive) {
+  StereoSync sync(1'000'000);
+  EXPECT_TRUE(sync.add(1, 100'000'000, grayOf(11)));  // right first
+  EXPECT_FALSE(sync.next());
+  EXPECT_TRUE(sync.add(0, 100'000'400, grayOf(10)));  // 0.4 ms apart: a pair
+  EXPECT_TRUE(sync.add(0, 150'000'000, grayOf(20)));
+  const auto p = sync.next();
+  ASSERT_TRUE(p);
+  EXPECT_EQ(p->t_ns, 100'000'400) << "the pair has the left image's stamp";
+  EXPECT_EQ(p->index, 0u);
+  EXPECT_EQ(p->left.at<std::uint8_t>(0, 0), 10);
+  EXPECT_EQ(p->right.at<std::uint8_t>(0, 0), 11);
+  EXPECT_FALSE(sync.next()) << "the second left image waits for its partner";
+  EXPECT_EQ(sync.waiting(0), 1u);
+  EXPECT_TRUE(sync.add(1, 150'000'000, grayOf(21)));
+  const auto q = sync.next();
+  ASSERT_TRUE(q);
+  EXPECT_EQ(q->index, 1u);
+  EXPECT_EQ(q->right.at<std::uint8_t>(0, 0), 21);
+  EXPECT_EQ(sync.unpaired(0) + sync.unpaired(1), 0u);
+}
+
+TEST(StereoSync, DropsAndCountsImagesWhosePartnerCannotComeAndImagesOutOfOrder) {
+  StereoSync sync(1'000'000);
+  sync.add(0, 100'000'000, grayOf(1));  // its right image is lost
+  sync.add(0, 150'000'000, grayOf(2));
+  sync.add(1, 150'000'000, grayOf(3));
+  const auto p = sync.next();
+  ASSERT_TRUE(p);
+  EXPECT_EQ(p->t_ns, 150'000'000);
+  EXPECT_EQ(sync.unpaired(0), 1u);
+  sync.add(1, 200'000'000, grayOf(4));  // its left image is lost
+  sync.add(1, 250'000'000, grayOf(5));
+  sync.add(0, 250'000'000, grayOf(6));
+  ASSERT_TRUE(sync.next());
+  EXPECT_EQ(sync.unpaired(1), 1u);
+  sync.add(0, 301'500'000, grayOf(7));  // 1.5 ms apart: beyond the tolerance, not a pair
+  sync.add(1, 300'000'000, grayOf(8));
+  sync.add(1, 350'000'000, grayOf(9));
+  EXPECT_FALSE(sync.next());
+  EXPECT_EQ(sync.unpaired(0), 2u);
+  EXPECT_EQ(sync.unpaired(1), 2u);
+  EXPECT_FALSE(sync.add(1, 350'000'000, grayOf(10))) << "a stamp not after the previous one of its camera";
+  EXPECT_FALSE(sync.add(0, 250'000'000, grayOf(10)));
+  EXPECT_EQ(sync.outOfOrder(0), 1u);
+  EXPECT_EQ(sync.outOfOrder(1), 1u);
+  EXPECT_THROW(sync.add(2, 400'000'000, grayOf(0)), std::invalid_argument);
 }
 
 }  // namespace

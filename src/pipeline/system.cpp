@@ -148,6 +148,15 @@ const FrameOutput* System::addFrame(const StereoFrame& frame) {
   return done_ ? &done_->out : nullptr;
 }
 
+std::size_t System::poll() {
+  std::size_t processed = 0;
+  for (; !pending_.empty() && imuCovers(pending_.front()); ++processed) {
+    process(pending_.front());
+    pending_.pop_front();
+  }
+  return processed;
+}
+
 TimeNs System::imuTime(const StereoFrame& frame) const {
   return frame.t_ns + static_cast<TimeNs>(std::llround(td_s_ * 1e9));
 }
@@ -187,7 +196,11 @@ void System::process(const StereoFrame& frame) {
 
 void System::backEnd(InFlight& f) {
   for (const ImuSample& s : f.imu) estimator_.addImu(s);
+  const std::size_t static_before = estimator_.staticMap().size();
   f.out.estimate = estimator_.addFrame(f.out.features);
+  const auto& static_map = estimator_.staticMap();
+  if (static_map.size() > static_before)
+    f.out.new_static_points.assign(static_map.begin() + static_cast<std::ptrdiff_t>(static_before), static_map.end());
   mapEliminated(f.out.features, f.out);
 }
 

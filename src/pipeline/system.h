@@ -37,6 +37,10 @@ struct FrameOutput {
   /// Points the front end judged moving at this frame, triangulated in the world from their
   /// stereo match (label kEliminated, id = feature id): they go to the dynamic map.
   std::vector<backend::MapPoint> eliminated_points;
+  /// Static landmarks that left the window at this frame (label kStatic, id = landmark id):
+  /// the static map grows by these (a live viewer's map; finish() returns all of them and
+  /// those still in the window).
+  std::vector<backend::MapPoint> new_static_points;
 };
 
 /// Receives every frame's output right after the system has computed it.
@@ -133,6 +137,11 @@ class System {
   /// feedback_delay 0, the previous one with 1 (null when none finished). Observers see every
   /// frame. The pointer is valid until the next call.
   const FrameOutput* addFrame(const StereoFrame& frame);
+  /// Processes the frames waiting for IMU samples that the samples given since now reach
+  /// (a live driver calls it after addImu so that a frame whose IMU came late is not held
+  /// until the next frame arrives). Returns the number of frames processed. The outputs
+  /// are those of the same calls without poll(): only when frames are processed changes.
+  std::size_t poll();
   /// Processes the frames still waiting for IMU samples that the samples reach (the others
   /// are counted in Summary::frames_beyond_imu), completes the frame still in flight (its
   /// observers are called), moves the window's

@@ -1,0 +1,144 @@
+// idyvins_ros: the ROS1 node. A thin driver of pipeline::System (Driver): reads the VINS-Fusion
+// config named by ~config_file (or the first argument, as VINS-Fusion's node), subscribes to
+// its imu_topic, image0_topic and image1_topic, publishes on ~odometry, ~path, TF, ~map_static,
+// ~map_dynamic, ~feature_image and ~timing (docs/ros.md). On SIGINT / SIGTERM it stops
+// listening, processes what it received, publishes the final maps and, with ~out, writes the
+// files `idyvins run` writes (trajectory.tum, state.csv, PLY maps, stats.json) and latency.csv.
+
+#include <ros/ros.h>
+
+#include <algorithm>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/error.h"
+#include "driver.h"
+#include "io/config.h"
+#include "pipeline/modes.h"
+#include "pipeline/observers.h"
+#include "pipeline/outputs.h"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+void onSignal(int) { g_stop = true; }
+
+struct NodeArgs {
+  std::string config_file, mode, out;
+  idyvins::ros_node::DriverOptions driver;
+};
+
+NodeArgs readParams(ros::NodeHandle& pnh, int argc, char** argv) {
+  NodeArgs a;
+  pnh.param<std::string>("config_file", a.config_file, argc > 1 ? argv[1] : "");
+  pnh.param<std::string>("mode", a.mode, "");
+  pnh.param<std::string>("out", a.out, "");
+  pnh.param("threads", a.driver.threads, 1);
+  pnh.param("queue_frames", a.driver.queue_frames, 0);
+  pnh.param<std::string>("world_frame", a.driver.publish.world_frame, "world");
+  pnh.param<std::string>("body_frame", a.driver.publish.body_frame, "body");
+  pnh.param("map_every_frames", a.driver.publish.map_every_frames, 10);
+  if (a.config_file.empty()) throw idyvins::InputError("idyvins_ros", "no config: set ~config_file or pass its path");
+  if (a.driver.threads != 1 && a.driver.threads != 2)
+    throw idyvins::InputError("idyvins_ros", "~threads must be 1 or 2, got " + std::to_string(a.driver.threads));
+  if (a.driver.queue_frames < 0) throw idyvins::InputError("idyvins_ros", "~queue_frames must be >= 0");
+  return a;
+}
+
+idyvins::Config nodeConfig(const NodeArgs& a) {
+  idyvins::Config config = idyvins::loadConfig(a.config_file);
+  if (!a.mode.empty() && !idyvins::parseMode(a.mode, config.mode))
+    throw idyvins::InputError("idyvins_ros", "~mode: expected " + idyvins::modeNames() + ", got '" + a.mode + "'");
+  if (idyvins::pipeline::traitsOf(config.mode).needs_masks)
+    throw idyvins::InputError("idyvins_ros", std::string("mode ") + idyvins::toString(config.mode) +
+                                                 " needs ground-truth masks, which a live node does not have");
+  return config;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+}
+
+nlohmann::json nodeSummary(const idyvins::ros_node::Driver& driver) {
+  const auto c = driver.counts();
+  std::vector<double> ms;
+  for (const auto& l : driver.publisher().latencies()) ms.push_back(l.latency_ms);
+  return {{"frames_in", c.frames_in},
+          {"frames_dropped_queue_full", c.frames_dropped},
+          {"images_unpaired", {c.unpaired[0], c.unpaired[1]}},
+          {"images_out_of_order", {c.out_of_order[0], c.out_of_order[1]}},
+          {"images_bad", c.bad_images},
+          {"latency_median_ms", percentile(ms, 0.5)},
+          {"latency_p95_ms", percentile(ms, 0.95)},
+          {"latency_max_ms", percentile(ms, 1.0)}};
+}
+
+void writeOutputs(const std::string& out, const idyvins::pipeline::Result& result, idyvins::Mode mode,
+                  const idyvins::ros_node::Driver& driver, idyvins::pipeline::StatsRecorder& stats,
+                  std::ofstream& stats_file) {
+  idyvins::pipeline::writeResultFiles(out, result);
+  nlohmann::json summary = idyvins::pipeline::summaryJson(result, mode, 0.0);
+  summary["threads"] = driver.system().threads();
+  summary["feedback_delay"] = driver.system().runOptions().feedback_delay;
+  summary["ros"] = nodeSummary(driver);
+  stats.finish(summary);
+  stats_file.close();
+  std::filesystem::rename(out + "/stats.json.part", out + "/stats.json");
+  std::ofstream lat(out + "/latency.csv.part");
+  lat << "#stamp_ns,latency_ms\n";
+  for (const auto& l : driver.publisher().latencies()) lat << l.t_ns << ',' << l.latency_ms << '\n';
+  lat.close();
+  std::filesystem::rename(out + "/latency.csv.part", out + "/latency.csv");
+}
+
+int runNode(int argc, char** argv) {
+  ros::NodeHandle nh, pnh("~");
+  const NodeArgs args = readParams(pnh, argc, argv);
+  const idyvins::Config config = nodeConfig(args);
+  std::ofstream stats_file;
+  std::unique_ptr<idyvins::pipeline::StatsRecorder> stats;
+  if (!args.out.empty()) {
+    std::filesystem::create_directories(args.out);
+    stats_file.open(args.out + "/stats.json.part");
+    if (!stats_file) throw idyvins::InputError(args.out, "cannot write stats.json.part");
+    stats = std::make_unique<idyvins::pipeline::StatsRecorder>(stats_file);
+  }
+  idyvins::ros_node::Driver driver(nh, pnh, config, args.driver);
+  if (stats) driver.addObserver(*stats);
+  ROS_INFO("idyvins: mode %s, %d thread(s); listening to %s, %s, %s", idyvins::toString(config.mode),
+           args.driver.threads, config.imu_topic.c_str(), config.image0_topic.c_str(), config.image1_topic.c_str());
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  while (!g_stop && ros::ok()) ros::WallDuration(0.02).sleep();
+  spinner.stop();
+  const idyvins::pipeline::Result result = driver.finish();
+  if (stats) writeOutputs(args.out, result, config.mode, driver, *stats, stats_file);
+  const nlohmann::json s = nodeSummary(driver);
+  ROS_INFO("idyvins: %zu frames processed, %zu poses, %zu dropped (queue full); latency median %.1f ms, p95 %.1f ms",
+           result.summary.frames, result.trajectory.size(), s["frames_dropped_queue_full"].get<std::size_t>(),
+           s["latency_median_ms"].get<double>(), s["latency_p95_ms"].get<double>());
+  return driver.error().empty() ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "idyvins", ros::init_options::NoSigintHandler);
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+  int code = 1;
+  try {
+    code = runNode(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    code = 1;
+  }
+  ros::shutdown();
+  return code;
+}

@@ -1,0 +1,59 @@
+#pragma once
+// What idyvins_ros publishes for each frame the system finishes (a pipeline::FrameObserver):
+// odometry, path and TF, the static and dynamic maps, the labelled feature image and the
+// frame's timing. Topic names and types: docs/ros.md.
+
+#include <ros/ros.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <chrono>
+#include <functional>
+#include <nav_msgs/Path.h>
+#include <string>
+#include <vector>
+
+#include "pipeline/system.h"
+
+namespace idyvins::ros_node {
+
+using SteadyTime = std::chrono::steady_clock::time_point;
+
+struct PublisherOptions {
+  std::string world_frame = "world";
+  std::string body_frame = "body";
+  int map_every_frames = 10;  ///< the map clouds are published every this many frames (and at the end)
+};
+
+/// Per-frame latency: from the arrival of the frame's second image to its odometry.
+struct LatencyRecord {
+  TimeNs t_ns = 0;
+  double latency_ms = 0;
+};
+
+class Publisher final : public pipeline::FrameObserver {
+ public:
+  /// `arrival(t_ns)` gives when the frame with image stamp t_ns arrived (steady clock).
+  Publisher(ros::NodeHandle& nh, const PublisherOptions& options, std::function<SteadyTime(TimeNs)> arrival);
+  void onFrame(const StereoFrame& input, const pipeline::FrameOutput& out) override;
+  /// The complete maps of finish() (latched topics).
+  void publishFinalMaps(const pipeline::Result& result);
+  const std::vector<LatencyRecord>& latencies() const { return latencies_; }
+  std::size_t published() const { return frames_; }
+
+ private:
+  void publishPose(const ros::Time& stamp, const imu::NavState& s);
+  void publishImage(const StereoFrame& input, const pipeline::FrameOutput& out, const ros::Time& stamp);
+  void publishTiming(const ros::Time& stamp, const pipeline::FrameOutput& out, double latency_ms);
+  void publishMaps(const ros::Time& stamp);
+
+  PublisherOptions options_;
+  std::function<SteadyTime(TimeNs)> arrival_;
+  ros::Publisher odometry_, path_, map_static_, map_dynamic_, image_, timing_;
+  tf2_ros::TransformBroadcaster tf_;
+  nav_msgs::Path path_msg_;
+  std::vector<backend::MapPoint> static_map_, dynamic_map_;
+  std::vector<LatencyRecord> latencies_;
+  std::size_t frames_ = 0;
+};
+
+}  // namespace idyvins::ros_node
