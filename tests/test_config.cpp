@@ -111,6 +111,8 @@ class MoveAwayFromDefaults final : public ParamVisitor {
       case ParamRule::kOpenUnit: v = v == 0.5 ? 0.3 : 0.5; break;
       case ParamRule::kFraction: v = v == 0.5 ? 0.7 : 0.5; break;
       case ParamRule::kCorrelation: v = v == 0.3 ? 0.4 : 0.3; break;
+      case ParamRule::kImuNoise: v = v == 0.5 ? 0.7 : 0.5; break;
+      case ParamRule::kGravity: v = v == 9.8 ? 9.79 : 9.8; break;
       default: v += 1.5;
     }
   }
@@ -383,7 +385,16 @@ TEST(Config, BadValuesNameKeyAndLine) {
   path = writeConfig(dir, replace(kConfig, "mode: ransac", "mode: magic"), kCamera);
   expectError([&] { loadConfig(path); }, "key 'mode': expected one of baseline|ransac|seg|idy|idy-pre|idy-ba");
   path = writeConfig(dir, replace(kConfig, "gyr_n: 0.01", "gyr_n: -0.01"), kCamera);
-  expectError([&] { loadConfig(path); }, "key 'gyr_n': expected a positive value");
+  expectError([&] { loadConfig(path); }, "key 'gyr_n': expected a plausible IMU noise value in (0, 10]");
+  // Values no IMU or camera has (issue: 'acc_n: 1e300' and 'fx: 1e300' were accepted).
+  path = writeConfig(dir, replace(kConfig, "acc_n: 0.1", "acc_n: 1e300"), kCamera);
+  expectError([&] { loadConfig(path); }, "key 'acc_n': expected a plausible IMU noise value in (0, 10]");
+  path = writeConfig(dir, replace(kConfig, "g_norm: 9.81", "g_norm: 98.1"), kCamera);
+  expectError([&] { loadConfig(path); }, "key 'g_norm': expected a gravity magnitude in [9, 10.5]");
+  path = writeConfig(dir, kConfig, replace(kCamera, "fx: 50.0", "fx: 1e300"));
+  expectError([&] { loadConfig(path); }, "expected focal lengths in (0, 6400] px for a 64x48 image");
+  path = writeConfig(dir, kConfig, replace(kCamera, "cx: 32.0", "cx: 320.0"));
+  expectError([&] { loadConfig(path); }, "expected the principal point inside the 64x48 image");
   path = writeConfig(dir, replace(kConfig, "num_of_cam: 1", "num_of_cam: 3"), kCamera);
   expectError([&] { loadConfig(path); }, "key 'num_of_cam': expected 1 or 2, got 3");
   path = writeConfig(dir, replace(kConfig, "image_width: 64", "image_width: 640"), kCamera);

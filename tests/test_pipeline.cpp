@@ -51,7 +51,8 @@ struct SceneRun {
 /// to its stamp. `live`: as a driver whose images come before the IMU: each frame before
 /// those samples, System::poll() after every sample.
 SceneRun runScene(Mode mode, double duration_s, const RunOptions& run_options = {},
-                  const std::function<void(std::vector<ImuSample>&)>& corrupt_imu = {}, bool live = false) {
+                  const std::function<void(std::vector<ImuSample>&)>& corrupt_imu = {}, bool live = false,
+                  const std::function<bool(StereoFrame&)>& corrupt_frame = {}) {
   sim::SimOptions o;
   o.scene.scene = "city";
   o.scene.level = sim::Level::kHigh;
@@ -81,16 +82,17 @@ SceneRun runScene(Mode mode, double duration_s, const RunOptions& run_options = 
         if (live) run.polled += system.poll();
       }
     };
-    if (!live) imuUpTo(f.t_ns);
     StereoFrame frame;
     frame.t_ns = f.t_ns;
     frame.index = k;
     frame.left = f.cam[0].image;
     frame.right = f.cam[1].image;
     frame.left_mask = f.cam[0].mask;
+    if (corrupt_frame && !corrupt_frame(frame)) continue;  // false: the frame is lost
+    if (!live) imuUpTo(frame.t_ns);
     const FrameOutput* out = system.addFrame(frame);
     if (out && out->estimate.initialized) ++run.outputs_with_pose;
-    if (live) imuUpTo(f.t_ns);
+    if (live) imuUpTo(frame.t_ns);
   }
   for (const auto& g : gt) run.truth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
   run.result = system.finish();
@@ -238,6 +240,121 @@ TEST(PipelineSystem, PollProcessesAWaitingFrameAsSoonAsItsImuIsHereWithTheSameOu
   ASSERT_GT(live.streamed_static.size(), 50u);
   ASSERT_LT(live.streamed_static.size(), map.size());
   EXPECT_TRUE(sameMap(live.streamed_static, {map.begin(), map.begin() + live.streamed_static.size()}));
+}
+
+// Faults a robot meets (issue: one continuous trajectory through faults). An 8 s city-high
+// sequence, the fault at 4 s; the run must complete, report the reset and its cause, and
+// keep one trajectory in one world frame.
+constexpr double kFaultSeqS = 8.0;
+constexpr TimeNs kFaultAt = 1'700'000'004'000'000'000;  // 4 s into the sequence (SimOptions::t0_ns + 4 s)
+
+struct FaultCheck {
+  std::size_t resets = 0;
+  std::string why, continued_by;
+  double ate_whole = 0;       ///< ATE over the whole file
+  double worst_excess_m = 0;  ///< largest step between consecutive poses beyond the truth's step
+};
+
+FaultCheck checkFault(const SceneRun& run, TimeNs shift_after = std::numeric_limits<TimeNs>::max(),
+                      TimeNs shift = 0) {
+  FaultCheck c;
+  const auto& resets = run.result.summary.resets;
+  c.resets = resets.size();
+  if (!resets.empty()) {
+    c.why = resets.front().why;
+    c.continued_by = resets.front().continued_by;
+    std::printf("reset at %+.3f s, resumed at %+.3f s, last status %s\n", 1e-9 * static_cast<double>(resets.front().t_ns - kFaultAt),
+                1e-9 * static_cast<double>(resets.front().resumed_t_ns - kFaultAt), run.result.summary.last_status.c_str());
+  }
+  std::vector<StampedPose> truth = run.truth, est;
+  for (auto& g : truth)  // ground truth on the shifted clock (time jump)
+    if (g.t_ns >= shift_after) g.t_ns += shift;
+  for (const auto& s : run.result.trajectory) est.push_back(toStampedPose(s));
+  c.ate_whole = eval::computeAte(truth, est, eval::AlignMode::kSe3, 1'000'000).stats.rmse;
+  auto truthAt = [&](TimeNs t) {
+    const auto it = std::lower_bound(truth.begin(), truth.end(), t,
+                                     [](const StampedPose& p, TimeNs x) { return p.t_ns < x; });
+    return it == truth.end() ? truth.back().p_w_b : it->p_w_b;
+  };
+  for (std::size_t i = 1; i < est.size(); ++i) {
+    const double step = (est[i].p_w_b - est[i - 1].p_w_b).norm();
+    const double truth_step = (truthAt(est[i].t_ns) - truthAt(est[i - 1].t_ns)).norm();
+    c.worst_excess_m = std::max(c.worst_excess_m, step - truth_step);
+  }
+  std::printf("resets %zu (%s; continued by %s), ATE whole file %.3f m, largest step beyond the truth's %.3f m\n",
+              c.resets, c.why.c_str(), c.continued_by.c_str(), c.ate_whole, c.worst_excess_m);
+  return c;
+}
+
+TEST(Faults, TheFaultTimeIsInsideTheSequence) {
+  EXPECT_EQ(kFaultAt, sim::SimOptions{}.t0_ns + 4'000'000'000);
+}
+
+TEST(Faults, ImuGapOfHalfASecondEndsTheSegmentAndTheNextGoesOnFromTheLastGoodState) {
+  const SceneRun run = runScene(Mode::kIdy, kFaultSeqS, RunOptions::twoThreads(), [](std::vector<ImuSample>& imu) {
+    imu.erase(std::remove_if(imu.begin(), imu.end(),
+                             [](const ImuSample& s) { return s.t_ns > kFaultAt && s.t_ns < kFaultAt + 500'000'000; }),
+              imu.end());
+  });
+  const FaultCheck c = checkFault(run);
+  EXPECT_EQ(c.resets, 1u);
+  EXPECT_NE(c.why.find("IMU gap of 0.5"), std::string::npos) << c.why;
+  EXPECT_EQ(c.continued_by, "extrapolated") << "a 0.5 s IMU dropout: bridged at constant velocity";
+  EXPECT_LT(c.worst_excess_m, 0.2) << "one piece: no step beyond the motion";
+  EXPECT_LT(c.ate_whole, 0.1);
+}
+
+TEST(Faults, OneSecondOfBlackImagesEndsTheSegmentAndTheNextGoesOnWithTheImu) {
+  const SceneRun run = runScene(Mode::kIdy, kFaultSeqS, RunOptions::twoThreads(), {}, false, [](StereoFrame& f) {
+    if (f.t_ns >= kFaultAt && f.t_ns < kFaultAt + 1'000'000'000) {
+      f.left = cv::Mat::zeros(f.left.size(), CV_8UC1);
+      f.right = cv::Mat::zeros(f.right.size(), CV_8UC1);
+    }
+    return true;
+  });
+  const FaultCheck c = checkFault(run);
+  EXPECT_GE(c.resets, 1u);
+  EXPECT_EQ(c.continued_by, "imu");
+  EXPECT_LT(c.worst_excess_m, 0.2);
+  EXPECT_LT(c.ate_whole, 0.1);
+}
+
+TEST(Faults, ATwoSecondTimeJumpOnCamerasAndImuIsDetectedAndBridgedByHolding) {
+  constexpr TimeNs kJump = 2'000'000'000;
+  const SceneRun run = runScene(
+      Mode::kIdy, kFaultSeqS, RunOptions::twoThreads(),
+      [](std::vector<ImuSample>& imu) {
+        for (auto& s : imu)
+          if (s.t_ns >= kFaultAt) s.t_ns += kJump;
+      },
+      false,
+      [](StereoFrame& f) {
+        if (f.t_ns >= kFaultAt) f.t_ns += kJump;
+        return true;
+      });
+  const FaultCheck c = checkFault(run, kFaultAt, kJump);
+  EXPECT_EQ(c.resets, 1u);
+  EXPECT_NE(c.why.find("no frame for 2.05"), std::string::npos) << c.why;
+  EXPECT_EQ(c.continued_by, "held");
+  EXPECT_LT(c.worst_excess_m, 0.2);
+  EXPECT_LT(c.ate_whole, 0.1);
+}
+
+TEST(Faults, CamerasAndImuSilentForHalfASecondEndTheSegmentWithoutNaN) {
+  const SceneRun run = runScene(
+      Mode::kIdy, kFaultSeqS, RunOptions::twoThreads(),
+      [](std::vector<ImuSample>& imu) {
+        imu.erase(std::remove_if(imu.begin(), imu.end(),
+                                 [](const ImuSample& s) { return s.t_ns > kFaultAt && s.t_ns < kFaultAt + 500'000'000; }),
+                  imu.end());
+      },
+      false, [](StereoFrame& f) { return !(f.t_ns > kFaultAt && f.t_ns < kFaultAt + 500'000'000); });
+  const FaultCheck c = checkFault(run);
+  EXPECT_EQ(c.resets, 1u);
+  EXPECT_NE(c.why.find("IMU gap"), std::string::npos) << c.why;
+  EXPECT_LT(c.worst_excess_m, 0.2);
+  EXPECT_LT(c.ate_whole, 0.1);
+  for (const auto& s : run.result.trajectory) ASSERT_TRUE(s.state.p_w_b.allFinite());
 }
 
 /// A walked static street rendered once: frames stamped with an image clock td_true behind

@@ -82,10 +82,25 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
   std::printf("mean tracking %.2f ms, filter %.3f ms, optimization %.2f ms, marginalization %.2f ms per frame\n",
               s["mean_tracking_ms"].get<double>(), s["mean_filter_ms"].get<double>(),
               s["mean_optimization_ms"].get<double>(), s["mean_marginalization_ms"].get<double>());
+  for (const auto& r : s["resets"])
+    std::printf("reset at %.3f s (frame %zu): %s; %s\n", 1e-9 * (r["t_ns"].get<double>() - s["first_t_ns"].get<double>()),
+                r["frame"].get<std::size_t>(), r["why"].get<std::string>().c_str(),
+                r["resumed_t_ns"].get<TimeNs>() < 0 ? "not initialized again"
+                : r["continued_by"] == "imu"        ? "went on from the last good state, propagated with the IMU"
+                : r["continued_by"] == "extrapolated" ? "went on from the last good state, at constant velocity across the IMU gap"
+                : r["continued_by"] == "held"       ? "went on from the last good state, held across the gap"
+                                                    : "started a new trajectory");
   if (s.contains("ate_rmse_m")) {
     const double ate = s["ate_rmse_m"], path = s["path_length_m"];
     std::printf("ATE RMSE (SE3) %.4f m over %.1f m (%.2f%%)\n", ate, path, 100 * ate / path);
   }
+  if (s.contains("segments"))
+    for (const auto& g : s["segments"])
+      if (!g["ate_rmse_m"].is_null())
+        std::printf("  segment %.2f-%.2f s, %zu poses: ATE %.4f m on its own\n",
+                    1e-9 * (g["from_t_ns"].get<double>() - s["first_t_ns"].get<double>()),
+                    1e-9 * (g["to_t_ns"].get<double>() - s["first_t_ns"].get<double>()), g["poses"].get<std::size_t>(),
+                    g["ate_rmse_m"].get<double>());
   std::printf("map: %zu static points, %zu dynamic points\n", s["map_static_points"].get<std::size_t>(),
               s["map_dynamic_points"].get<std::size_t>());
   if (const auto& c = s["classification"]; !c.is_null())
@@ -93,7 +108,7 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
                 "%.2f%% of the static map on moving objects\n",
                 100 * c["moving_detected_fraction"].get<double>(), 100 * c["static_flagged_fraction"].get<double>(),
                 100 * c["static_map_fraction_on_moving"].get<double>());
-  std::printf("wrote %s/trajectory.tum, trajectory.csv, state.csv, stats.json, map_static.ply, map_dynamic.ply, map_all.ply\n",
+  std::printf("wrote %s/trajectory.tum, trajectory.csv, state.csv, stats.json, resets.csv, map_static.ply, map_dynamic.ply, map_all.ply\n",
               out.c_str());
 }
 

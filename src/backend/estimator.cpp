@@ -139,8 +139,30 @@ void Estimator::resetWindow() {
 
 void Estimator::resetAfterFailure() {
   resetWindow();
+  reanchor_pending_ = last_good_.has_value();
   td_s_ = options_.td_s;  // a failure may come from a wrong offset: start again from the config's
   td_restarted_ = false;
+}
+
+std::string Estimator::bridgeProblem(TimeNs t1) const {
+  const TimeNs t0 = frames_[count_].t_ns;
+  char text[120];
+  if (t1 - t0 > static_cast<TimeNs>(options_.max_frame_gap_s * 1e9)) {
+    std::snprintf(text, sizeof(text), "no frame for %.3f s (max_frame_gap %.3f s)", 1e-9 * (t1 - t0),
+                  options_.max_frame_gap_s);
+    return text;
+  }
+  if (imu_.empty() || imu_.front().t_ns > t0 || imu_.back().t_ns < t1) return "no IMU data between frames";
+  // The samples the integration uses: the last one at or before t0 to the first at or after t1.
+  auto it = std::upper_bound(imu_.begin(), imu_.end(), t0, [](TimeNs t, const ImuSample& s) { return t < s.t_ns; });
+  if (it != imu_.begin()) --it;
+  TimeNs largest = 0;
+  for (; it + 1 != imu_.end() && it->t_ns < t1; ++it) largest = std::max(largest, (it + 1)->t_ns - it->t_ns);
+  if (largest > static_cast<TimeNs>(options_.max_imu_gap_s * 1e9)) {
+    std::snprintf(text, sizeof(text), "IMU gap of %.3f s (max_imu_gap %.3f s)", 1e-9 * largest, options_.max_imu_gap_s);
+    return text;
+  }
+  return "";
 }
 
 std::unique_ptr<imu::Preintegration> Estimator::integrate(TimeNs t0, TimeNs t1, const imu::NavState& from) const {
@@ -162,6 +184,14 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     r.status = "skipped: time stamp not after the previous frame";
     return r;
   }
+  if (count_ >= 0) {
+    // A gap the integration cannot bridge ends the segment: this frame starts a new window.
+    if (const std::string why = bridgeProblem(ff.t_ns); !why.empty()) {
+      r.reset = initialized_;
+      r.reset_why = why;
+      if (initialized_) resetAfterFailure(); else resetWindow();
+    }
+  }
   const int n = count_ + 1;
   Frame& f = frames_[n];
   f.t_ns = ff.t_ns;
@@ -171,12 +201,6 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
   } else {
     const imu::NavState prev = frames_[n - 1].nav();
     f.pre = integrate(frames_[n - 1].t_ns, ff.t_ns, prev);
-    if (!f.pre) {
-      r.status = "reset: no IMU data between frames";
-      r.reset = initialized_;
-      if (initialized_) resetAfterFailure(); else resetWindow();
-      return r;
-    }
     f.setNav(f.pre->predict(prev));
   }
   count_ = n;
@@ -194,6 +218,7 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
   std::string why;
   if (failureDetected(why)) {
     r.reset = true;
+    r.reset_why = why;
     r.status = "reset: " + why;
     resetAfterFailure();
     return r;
@@ -203,6 +228,8 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
   r.state = frames_[count_].nav();
   r.td_s = td_s_;
   last_T_w_b_ = frames_[count_].T_w_b();
+  last_good_ = r.state;
+  last_good_t_ns_ = ff.t_ns;
   const auto slide_start = std::chrono::steady_clock::now();
   slide(r.keyframe);
   r.marginalization_ms =
@@ -240,7 +267,62 @@ bool Estimator::initStep(FrameResult& r) {
     return false;
   }
   r.status = "initialized";
+  if (reanchor_pending_) r.reanchored = reanchor();
   return true;
+}
+
+std::string Estimator::reanchor() {
+  reanchor_pending_ = false;
+  const TimeNs t_end = frames_[0].t_ns, max_gap = static_cast<TimeNs>(options_.max_imu_gap_s * 1e9);
+  imu::NavState s = *last_good_;
+  bool held = false, extrapolated = false;
+  // Integrate over the runs of samples without a gap; across a gap the state is held.
+  TimeNs t = last_good_t_ns_;
+  const std::size_t n = imu_.size();
+  std::size_t k = static_cast<std::size_t>(
+      std::upper_bound(imu_.begin(), imu_.end(), t, [](TimeNs x, const ImuSample& a) { return x < a.t_ns; }) -
+      imu_.begin());
+  if (k == 0) {  // no sample at or before the last good state: held up to the first one
+    held = true;
+    if (n == 0) k = n;
+    else t = std::min(t_end, imu_[0].t_ns);
+  } else {
+    --k;  // the last sample at or before t
+  }
+  while (t < t_end && k < n) {
+    std::size_t j = k;  // the run of samples without a gap from k on
+    while (j + 1 < n && imu_[j + 1].t_ns - imu_[j].t_ns <= max_gap && imu_[j].t_ns < t_end) ++j;
+    const TimeNs to = std::min(t_end, imu_[j].t_ns);
+    if (to > t) s = imu::integrateBetween(imu_, t, to, s.ba, s.bg, noise_).predict(s);
+    t = to;
+    if (t >= t_end) break;
+    k = j + 1;  // a gap after sample j, or no samples after it
+    if (k >= n) break;
+    const TimeNs gap_end = std::min(t_end, imu_[k].t_ns);
+    // A dropout no longer than max_frame_gap: the body went on at its velocity. Longer (a time
+    // jump, a stop): held.
+    if (gap_end - t <= static_cast<TimeNs>(options_.max_frame_gap_s * 1e9)) {
+      s.p_w_b += s.v_w * (1e-9 * static_cast<double>(gap_end - t));
+      extrapolated = true;
+    } else {
+      held = true;
+    }
+    t = gap_end;
+  }
+  if (t < t_end) held = true;
+  Isometry3d T_pred = Isometry3d::Identity();
+  T_pred.linear() = s.q_w_b.toRotationMatrix();
+  T_pred.translation() = s.p_w_b;
+  const Isometry3d T_corr = gaugeCorrection(T_pred, frames_[0].T_w_b());
+  const Quaterniond q_corr(T_corr.linear());
+  for (int k = 0; k <= count_; ++k) {
+    imu::NavState f = frames_[k].nav();
+    f.p_w_b = T_corr * f.p_w_b;
+    f.q_w_b = (q_corr * f.q_w_b).normalized();
+    f.v_w = q_corr * f.v_w;
+    frames_[k].setNav(f);
+  }
+  return held ? "held" : extrapolated ? "extrapolated" : "imu";
 }
 
 bool Estimator::alignTimeOffset(FrameResult& r) {
@@ -343,7 +425,7 @@ void Estimator::optimize(FrameResult& r) {
   ceres::Problem problem(borrowingProblemOptions());
   std::vector<std::shared_ptr<ceres::CostFunction>> costs;  // owned here, borrowed by the problem
   ceres::HuberLoss huber(options_.huber_px);
-  addStateAndImu(problem, costs);
+  r.skipped_blocks = addStateAndImu(problem, costs);
   // Candidate weights 1/m_j (DESIGN §4.5): one value per (landmark, frame), owned here,
   // pointed to by the factors and refreshed by the iteration callback below.
   std::deque<CandidateWeight> weights;
@@ -396,21 +478,40 @@ void Estimator::optimize(FrameResult& r) {
   p.converged = summary.termination_type == ceres::CONVERGENCE;
 }
 
-void Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
+bool Estimator::finiteAt(const ceres::CostFunction& cost, const std::vector<double*>& blocks) {
+  std::vector<double> residuals(static_cast<std::size_t>(cost.num_residuals()));
+  if (!cost.Evaluate(blocks.data(), residuals.data(), nullptr)) return false;
+  for (double x : residuals)
+    if (!std::isfinite(x)) return false;
+  return true;
+}
+
+int Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
+  int skipped = 0;
   for (int i = 0; i <= count_; ++i) {
     problem.AddParameterBlock(frames_[i].pose.data(), 7, const_cast<PoseManifold*>(&kPoseManifold));
     problem.AddParameterBlock(frames_[i].sb.data(), 9);
   }
+  // Every block is evaluated once before it enters the problem: one that is not finite at
+  // the start values (a degenerate integration, a prior gone bad) is left out and counted.
   if (prior_) {
     costs.push_back(std::make_shared<MarginalizationFactor>(prior_));
-    problem.AddResidualBlock(costs.back().get(), nullptr, prior_->blocks);
+    if (finiteAt(*costs.back(), prior_->blocks))
+      problem.AddResidualBlock(costs.back().get(), nullptr, prior_->blocks);
+    else
+      ++skipped;
   }
   for (int i = 1; i <= count_; ++i) {
     if (frames_[i].pre->sumDt() > 10.0) continue;
     costs.push_back(std::make_shared<ImuFactor>(frames_[i].pre.get()));
-    problem.AddResidualBlock(costs.back().get(), nullptr, frames_[i - 1].pose.data(), frames_[i - 1].sb.data(),
-                             frames_[i].pose.data(), frames_[i].sb.data());
+    const std::vector<double*> blocks{frames_[i - 1].pose.data(), frames_[i - 1].sb.data(), frames_[i].pose.data(),
+                                      frames_[i].sb.data()};
+    if (finiteAt(*costs.back(), blocks))
+      problem.AddResidualBlock(costs.back().get(), nullptr, blocks);
+    else
+      ++skipped;
   }
+  return skipped;
 }
 
 std::vector<double*> Estimator::factorBlocks(Landmark& lm, int frame, bool with_td) {
@@ -427,7 +528,7 @@ int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_p
   const ProjectionWeight w{rig_.focal_px, options_.sigma_px, nullptr};
   int used = 0;
   for (auto& [id, lm] : fm_.landmarks()) {
-    if (!lm.usable()) continue;
+    if (!lm.usable() || !std::isfinite(lm.inv_depth)) continue;
     ++used;
     const bool candidate = options_.candidate_weights && lm.label == FeatureLabel::kCandidate;
     candidates += candidate;
@@ -571,8 +672,9 @@ void Estimator::slide(bool keyframe) {
     marginalizeOldest();
   else
     dropSecondNewest();
-  // Keep the IMU samples still needed (from the oldest window frame on).
-  const TimeNs keep_from = frames_[0].t_ns;
+  // Keep the IMU samples still needed (from the oldest window frame on, and from the last
+  // good state while a new segment must continue from it).
+  const TimeNs keep_from = reanchor_pending_ ? std::min(frames_[0].t_ns, last_good_t_ns_) : frames_[0].t_ns;
   std::size_t first = 0;
   while (first + 1 < imu_.size() && imu_[first + 1].t_ns <= keep_from) ++first;
   if (first > 0) imu_.erase(imu_.begin(), imu_.begin() + static_cast<std::ptrdiff_t>(first));

@@ -7,7 +7,9 @@
 #include <array>
 #include <deque>
 #include <memory>
+#include <optional>
 #include <set>
+#include <string>
 #include <vector>
 
 #include "backend/feature_manager.h"
@@ -86,6 +88,14 @@ struct FrameResult {
   std::vector<MapPoint> confirmed_points;
   bool keyframe = false;
   double td_s = 0;  ///< camera–IMU time offset after this frame (the config's td unless estimate_td)
+  /// Why the window was reset at this frame (with `reset`); `status` may say what came next.
+  std::string reset_why;
+  /// The first initialized frame after a reset: the new segment was put in the world frame of
+  /// the last good state, propagated to it with the IMU ("imu"); across an IMU gap of at most
+  /// max_frame_gap at constant velocity ("extrapolated"), across a longer one (a time jump, a
+  /// stop) held ("held"); empty otherwise.
+  std::string reanchored;
+  int skipped_blocks = 0;  ///< residual blocks left out of this solve: not finite at their start values
 };
 
 /// The newest state, for the front end's motion prior (DESIGN §2: one small struct).
@@ -142,7 +152,8 @@ class Estimator {
   };
   /// The window's Ceres solve: state, prior, IMU and projection factors; gauge restored.
   void optimize(FrameResult& result);
-  void addStateAndImu(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
+  /// Returns the number of blocks left out (not finite at their start values).
+  int addStateAndImu(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
   /// Projection factors of the usable landmarks (candidates weighted); returns how many.
   int addProjections(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
                      ceres::LossFunction& huber, std::deque<CandidateWeight>& weights, int& candidates);
@@ -162,6 +173,14 @@ class Estimator {
   Eigen::Vector3d landmarkWorld(const Landmark& lm) const;
   void addToStaticMap(const Landmark& lm);
   bool failureDetected(std::string& why) const;
+  /// Why frame `t1` cannot be integrated to from the window's newest frame (a frame or IMU gap
+  /// too long, no samples), empty when it can.
+  std::string bridgeProblem(TimeNs t1) const;
+  /// After a reset: the new window, just aligned with gravity, moved (yaw and position) onto the
+  /// last good state propagated to its oldest frame. Returns how (FrameResult::reanchored).
+  std::string reanchor();
+  /// True when the block's residual (and the parameters it is evaluated at) are finite.
+  static bool finiteAt(const ceres::CostFunction& cost, const std::vector<double*>& blocks);
   void slide(bool keyframe);
   void marginalizeOldest();
   void dropSecondNewest();
@@ -184,6 +203,11 @@ class Estimator {
   std::set<std::uint64_t> dynamic_ids_;
   double td_s_ = 0;  ///< camera–IMU time offset (s), a solver block when estimate_td
   bool td_restarted_ = false;  ///< the initialization restarted once for the offset (since the last failure)
+  /// The last good state (after the newest successful frame) and whether the next
+  /// initialization must continue from it (a reset happened since).
+  std::optional<imu::NavState> last_good_;
+  TimeNs last_good_t_ns_ = 0;
+  bool reanchor_pending_ = false;
 };
 
 }  // namespace idyvins::backend

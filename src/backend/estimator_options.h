@@ -34,6 +34,13 @@ struct EstimatorOptions {
   int min_pnp_points = 15;
   int clear_after_observations = 4;  ///< a candidate that passes with this many observations becomes static
 
+  // What the integration between two frames can bridge (issue: faults end a segment cleanly).
+  /// Two IMU samples farther apart than this between two frames (a dropout, a time jump)
+  /// reset the window: the gap is not integrated.
+  double max_imu_gap_s = 0.1;
+  /// Two frames farther apart than this (a camera dropout, a time jump) reset the window.
+  double max_frame_gap_s = 1.0;
+
   // Set by the mode (pipeline/modes.h), not config keys.
   /// DESIGN §4.5: candidate observations weighted by 1/m_j, recomputed every solver
   /// iteration from the current poses (modes idy, idy-ba).
@@ -73,6 +80,9 @@ struct EstimatorOptions {
     v.param({"min_pnp_points", "points of an initialization PnP", ParamRule::kPositive}, min_pnp_points);
     v.param({"candidate_clear_observations", "passing observations that clear a candidate", ParamRule::kPositive},
             clear_after_observations);
+    v.section("Faults: what the integration between two frames bridges (larger gaps reset the window)");
+    v.param({"max_imu_gap", "s, largest gap between two IMU samples", ParamRule::kPositive}, max_imu_gap_s);
+    v.param({"max_frame_gap", "s, largest gap between two frames", ParamRule::kPositive}, max_frame_gap_s);
   }
 };
 

@@ -16,6 +16,8 @@ enum class ParamRule {
   kOpenUnit,     ///< in (0, 1)
   kFraction,     ///< in (0, 1]
   kCorrelation,  ///< in [-1, 1]
+  kImuNoise,     ///< in (0, 10]: an IMU noise density or random walk (SI units) that can be real
+  kGravity,      ///< in [9, 10.5] m/s^2: a gravity magnitude on Earth
 };
 
 /// One config key.

@@ -187,9 +187,17 @@ camera::CameraParams loadCameraFile(const std::string& path) {
     throw InputError(path, lineOf(model_node),
                      "unknown camera model '" + model + "' (expected PINHOLE or KANNALA_BRANDT)");
   }
-  if (!(cam.fx > 0 && cam.fy > 0))
-    throw InputError(path, "expected positive focal lengths, got " + std::to_string(cam.fx) +
-                               ", " + std::to_string(cam.fy));
+  // Plausible for a real camera: focal lengths up to 100 image widths (a 0.6 degree view),
+  // the principal point inside the image.
+  const double max_f = 100.0 * std::max(cam.width, cam.height);
+  if (!(cam.fx > 0 && cam.fy > 0 && cam.fx <= max_f && cam.fy <= max_f))
+    throw InputError(path, "expected focal lengths in (0, " + std::to_string(static_cast<int>(max_f)) +
+                               "] px for a " + std::to_string(cam.width) + "x" + std::to_string(cam.height) +
+                               " image, got " + std::to_string(cam.fx) + ", " + std::to_string(cam.fy));
+  if (!(cam.cx >= 0 && cam.cx <= cam.width && cam.cy >= 0 && cam.cy <= cam.height))
+    throw InputError(path, "expected the principal point inside the " + std::to_string(cam.width) + "x" +
+                               std::to_string(cam.height) + " image, got (" + std::to_string(cam.cx) + ", " +
+                               std::to_string(cam.cy) + ")");
   return cam;
 }
 
@@ -222,6 +230,8 @@ const char* ruleText(ParamRule rule) {
     case ParamRule::kOpenUnit: return "a value in (0, 1)";
     case ParamRule::kFraction: return "a value in (0, 1]";
     case ParamRule::kCorrelation: return "a value in [-1, 1]";
+    case ParamRule::kImuNoise: return "a plausible IMU noise value in (0, 10]";
+    case ParamRule::kGravity: return "a gravity magnitude in [9, 10.5]";
     case ParamRule::kAny: break;
   }
   return "a number";
@@ -234,6 +244,8 @@ bool satisfies(double v, ParamRule rule) {
     case ParamRule::kOpenUnit: return v > 0 && v < 1;
     case ParamRule::kFraction: return v > 0 && v <= 1;
     case ParamRule::kCorrelation: return v >= -1 && v <= 1;
+    case ParamRule::kImuNoise: return v > 0 && v <= 10;
+    case ParamRule::kGravity: return v >= 9 && v <= 10.5;
     case ParamRule::kAny: break;
   }
   return true;
@@ -281,11 +293,11 @@ class YamlLoader final : public ParamVisitor {
 /// The config's own keys beside the modules' structs: IMU noise and limits.
 void declareImuParams(ParamVisitor& v, Config& c) {
   v.section("IMU noise (VINS-Fusion semantics, docs/conventions.md)");
-  v.param({"acc_n", "m/s^2, accelerometer noise of one sample", ParamRule::kPositive, c.use_imu}, c.imu.acc_n);
-  v.param({"gyr_n", "rad/s, gyroscope noise of one sample", ParamRule::kPositive, c.use_imu}, c.imu.gyr_n);
-  v.param({"acc_w", "m/s^3, accelerometer bias random walk", ParamRule::kPositive, c.use_imu}, c.imu.acc_w);
-  v.param({"gyr_w", "rad/s^2, gyroscope bias random walk", ParamRule::kPositive, c.use_imu}, c.imu.gyr_w);
-  v.param({"g_norm", "m/s^2, gravity magnitude", ParamRule::kPositive, c.use_imu}, c.imu.g_norm);
+  v.param({"acc_n", "m/s^2, accelerometer noise of one sample", ParamRule::kImuNoise, c.use_imu}, c.imu.acc_n);
+  v.param({"gyr_n", "rad/s, gyroscope noise of one sample", ParamRule::kImuNoise, c.use_imu}, c.imu.gyr_n);
+  v.param({"acc_w", "m/s^3, accelerometer bias random walk", ParamRule::kImuNoise, c.use_imu}, c.imu.acc_w);
+  v.param({"gyr_w", "rad/s^2, gyroscope bias random walk", ParamRule::kImuNoise, c.use_imu}, c.imu.gyr_w);
+  v.param({"g_norm", "m/s^2, gravity magnitude", ParamRule::kGravity, c.use_imu}, c.imu.g_norm);
   v.param({"imu_max_acc", "m/s^2, acceleration norm above which a sample is dropped (counted)", ParamRule::kPositive},
           c.imu_max_acc_mps2);
   v.param({"imu_max_gyr", "rad/s, angular rate norm above which a sample is dropped (counted)", ParamRule::kPositive},

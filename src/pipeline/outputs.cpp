@@ -1,6 +1,7 @@
 #include "pipeline/outputs.h"
 
 #include <filesystem>
+#include <fstream>
 #include <functional>
 
 #include "core/error.h"
@@ -37,6 +38,39 @@ nlohmann::json solveProfileJson(const Summary& s) {
 
 }  // namespace
 
+namespace {
+
+void writeResetsCsv(const std::string& path, const std::vector<ResetEvent>& resets) {
+  std::ofstream f(path);
+  if (!f) throw InputError(path, "cannot write file");
+  f << "#t_ns,frame,resumed_t_ns,continued_by,why\n";
+  for (const auto& e : resets) {
+    std::string why = e.why;  // one CSV field: no commas or quotes of its own
+    for (char& c : why)
+      if (c == ',' || c == '"') c = ';';
+    f << e.t_ns << ',' << e.frame << ',' << e.resumed_t_ns << ',' << e.continued_by << ',' << why << '\n';
+  }
+  if (!f) throw InputError(path, "write failed");
+}
+
+/// The trajectory cut at the resets: poses from one reset to the next are one segment.
+std::vector<std::vector<StampedPose>> segments(const Result& r) {
+  std::vector<std::vector<StampedPose>> out(1);
+  std::size_t next = 0;
+  for (const auto& s : r.trajectory) {
+    bool cut = false;
+    while (next < r.summary.resets.size() && r.summary.resets[next].t_ns <= s.t_ns) {
+      cut = true;
+      ++next;
+    }
+    if (cut && !out.back().empty()) out.emplace_back();
+    out.back().push_back(toStampedPose(s));
+  }
+  return out;
+}
+
+}  // namespace
+
 void writeResultFiles(const std::string& out, const Result& r) {
   // Each file is written under a temporary name and renamed when complete: a run stopped
   // while writing never leaves a cut file under a final name.
@@ -59,13 +93,19 @@ void writeResultFiles(const std::string& out, const Result& r) {
   atomically("trajectory.tum", [&](const std::string& p) { io::writeTum(p, poses); });
   atomically("trajectory.csv", [&](const std::string& p) { io::writeEurocCsv(p, poses); });
   atomically("state.csv", [&](const std::string& p) { io::writeStateCsv(p, states); });
+  atomically("resets.csv", [&](const std::string& p) { writeResetsCsv(p, r.summary.resets); });
 }
 
 nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
   const Summary& s = r.summary;
   const double n = static_cast<double>(s.frames), seq_s = toSeconds(s.last_t_ns - s.first_t_ns);
   nlohmann::json resets = nlohmann::json::array();
-  for (const auto& e : s.resets) resets.push_back({{"t_ns", e.t_ns}, {"frame", e.frame}, {"why", e.why}});
+  for (const auto& e : s.resets)
+    resets.push_back({{"t_ns", e.t_ns},
+                      {"frame", e.frame},
+                      {"why", e.why},
+                      {"resumed_t_ns", e.resumed_t_ns},
+                      {"continued_by", e.continued_by}});
   return {{"frames", s.frames},
           {"mode", toString(mode)},
           {"sequence_s", seq_s},
@@ -77,6 +117,7 @@ nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
           {"mean_marginalization_ms", s.sum_marginalization_ms / n},
           {"solve_profile", solveProfileJson(s)},
           {"poses", r.trajectory.size()},
+          {"first_t_ns", s.first_t_ns},
           {"initialized_at_s", s.init_t_ns >= 0 ? toSeconds(s.init_t_ns - s.first_t_ns) : -1.0},
           {"frames_without_prior", s.frames_without_prior},
           {"frames_beyond_imu", s.frames_beyond_imu},
@@ -102,7 +143,22 @@ void addAte(nlohmann::json& summary, const std::vector<StampedPose>& gt, const R
     summary["ate_rmse_m"] = ate.stats.rmse;
     summary["path_length_m"] = eval::pathLength(gt_pairs);
   } catch (const std::exception&) {  // no overlap with the ground truth: no ATE
+    return;
   }
+  if (r.summary.resets.empty()) return;
+  // With resets, the ATE of each segment on its own too (each aligned separately).
+  nlohmann::json per = nlohmann::json::array();
+  for (const auto& seg : segments(r)) {
+    nlohmann::json j = {{"from_t_ns", seg.front().t_ns}, {"to_t_ns", seg.back().t_ns}, {"poses", seg.size()}};
+    try {
+      j["ate_rmse_m"] = seg.size() > 2 ? nlohmann::json(eval::computeAte(gt, seg, eval::AlignMode::kSe3, 10'000'000).stats.rmse)
+                                       : nlohmann::json();
+    } catch (const std::exception&) {
+      j["ate_rmse_m"] = nullptr;
+    }
+    per.push_back(j);
+  }
+  summary["segments"] = per;
 }
 
 

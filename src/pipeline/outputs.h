@@ -12,7 +12,8 @@ namespace idyvins::pipeline {
 
 /// Writes into the existing `folder`: trajectory.tum (TUM), trajectory.csv (EuRoC),
 /// state.csv (pose, velocity, biases in EuRoC's ground-truth columns), map_static.ply,
-/// map_dynamic.ply and map_all.ply (labelled points); each under NAME.part first, renamed
+/// map_dynamic.ply and map_all.ply (labelled points), resets.csv (each reset: time, frame,
+/// when and how the trajectory went on, why); each under NAME.part first, renamed
 /// when complete. Throws InputError when a file cannot be written.
 void writeResultFiles(const std::string& folder, const Result& result);
 
@@ -22,7 +23,8 @@ void writeResultFiles(const std::string& folder, const Result& result);
 nlohmann::json summaryJson(const Result& result, Mode mode, double wall_s);
 
 /// Adds ate_rmse_m (SE3 alignment, stamps associated within 10 ms) and path_length_m
-/// against `groundtruth` to `summary`; adds nothing when the two do not overlap.
+/// against `groundtruth` to `summary`; adds nothing when the two do not overlap. After
+/// resets, "segments" holds each segment's span and its own ATE too (aligned on its own).
 void addAte(nlohmann::json& summary, const std::vector<StampedPose>& groundtruth, const Result& result);
 
 }  // namespace idyvins::pipeline

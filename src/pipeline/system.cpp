@@ -267,7 +267,11 @@ void System::account(FrameOutput& out) {
     trajectory_.push_back({r.t_ns, r.state});
     if (s.init_t_ns < 0) s.init_t_ns = r.t_ns;
   }
-  if (r.reset) s.resets.push_back({r.t_ns, out.index, r.status});
+  if (r.reset) s.resets.push_back({r.t_ns, out.index, r.reset_why.empty() ? r.status : r.reset_why, -1, ""});
+  if (r.initialized && !s.resets.empty() && s.resets.back().resumed_t_ns < 0) {
+    s.resets.back().resumed_t_ns = r.t_ns;
+    s.resets.back().continued_by = r.reanchored;
+  }
   if (out.idy && !out.idy->prior_valid) ++s.frames_without_prior;
   s.sum_tracking_ms += out.features.tracking_ms;
   s.sum_filter_ms += out.features.filter_ms;

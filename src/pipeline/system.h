@@ -57,11 +57,16 @@ struct StampedState {
   imu::NavState state;
 };
 
-/// A reset of the estimator: when, at which frame, and why.
+/// A reset of the estimator: when, at which frame, and why; and how the trajectory went on.
 struct ResetEvent {
   TimeNs t_ns = 0;
   std::size_t frame = 0;
   std::string why;
+  /// The first initialized frame after it (-1: none), and how the new segment was put in the
+  /// world frame of the last good state (backend::FrameResult::reanchored: "imu",
+  /// "extrapolated" or "held"; empty when no state came before).
+  TimeNs resumed_t_ns = -1;
+  std::string continued_by;
 };
 
 /// Counters over a whole run.
