@@ -124,7 +124,10 @@ def play_into_nodes(ros, bag, cfg, work):
     inputs = ["/imu0", "/cam0/image_raw", "/cam1/image_raw"]
     check(wait_for(lambda: subscribed(inputs, "/idyvins1") and subscribed(inputs, "/idyvins2"), 60),
           "both nodes subscribed to the config's imu_topic, image0_topic, image1_topic")
-    play = subprocess.run(["rosbag", "play", "-q", "--wait-for-subscribers", "--topics"] + inputs + ["--", bag],
+    # --wait-for-subscribers waits for one subscriber per topic; -d gives the second node time to
+    # connect too after each advertise (under load a connection can take a while).
+    play = subprocess.run(["rosbag", "play", "-q", "--wait-for-subscribers", "-d", "2", "--topics"] + inputs +
+                          ["--", bag],
                           env=ros.env, capture_output=True, text=True, timeout=300)
     check(play.returncode == 0, "rosbag play: " + play.stderr.strip()[-200:])
     codes = {}

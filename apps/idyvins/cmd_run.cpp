@@ -1,8 +1,11 @@
 // `idyvins run`: the whole system (pipeline::System) on a dataset; writes the trajectory,
 // the maps and stats. Parse arguments, open the source, drive the pipeline, write outputs.
 
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
+#include <unistd.h>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -41,11 +44,51 @@ class ProgressObserver final : public pipeline::FrameObserver {
   ProgressBar bar_;
 };
 
-/// Feeds the source to the system in time order; returns the number of frames.
+/// The signal that asked the run to stop (SIGINT, SIGTERM), 0 while none did. A signal
+/// handler can only set a flag: this is the command's, not the library's.
+std::atomic<int> g_stop_signal{0};
+extern "C" void onStopSignal(int sig) { g_stop_signal = sig; }
+
+/// The output folder is written as a whole: into a fresh staging folder beside it, swapped
+/// in when complete, so an interrupted or killed run never leaves old and new files mixed.
+class StagedFolder {
+ public:
+  explicit StagedFolder(const std::string& out) {
+    namespace fs = std::filesystem;
+    fs::path p(out);
+    if (p.filename().empty()) p = p.parent_path();  // "out/" -> "out"
+    final_ = p.string();
+    staging_ = final_ + ".partial-" + std::to_string(::getpid());
+    std::error_code ec;
+    if (fs::exists(final_) && !fs::is_directory(final_)) throw InputError(out, "exists and is not a folder");
+    if (p.has_parent_path()) fs::create_directories(p.parent_path(), ec);
+    fs::remove_all(staging_, ec);
+    if (!fs::create_directory(staging_, ec) || ec)
+      throw InputError(staging_, "cannot create output folder: " + (ec ? ec.message() : "exists"));
+  }
+  const std::string& path() const { return staging_; }
+  /// Replaces the old folder (if any) by the staging folder.
+  void publish() {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const std::string old = final_ + ".old-" + std::to_string(::getpid());
+    const bool had_old = fs::exists(final_);
+    if (had_old) fs::rename(final_, old, ec);
+    if (!ec) fs::rename(staging_, final_, ec);
+    if (ec) throw InputError(final_, "cannot move the finished results into place: " + ec.message());
+    if (had_old) fs::remove_all(old, ec);
+  }
+
+ private:
+  std::string final_, staging_;
+};
+
+/// Feeds the source to the system in time order until it ends, max_frames or a stop
+/// signal; returns the number of frames.
 std::size_t drive(io::DataSource& source, pipeline::System& system, std::size_t max_frames) {
   PrefetchSource prefetch(source, 4);  // decodes the next images while the system works
   std::size_t frames = 0;
-  while (frames < max_frames) {
+  while (frames < max_frames && g_stop_signal == 0) {
     auto m = prefetch.next();
     if (!m) break;
     if (const auto* imu = std::get_if<ImuSample>(&*m)) {
@@ -112,8 +155,8 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
               out.c_str());
 }
 
-int runRun(const RunArgs& a) {
-  Config config = loadConfig(a.config);
+pipeline::System makeSystem(const RunArgs& a, Config& config) {
+  config = loadConfig(a.config);
   if (!a.mode.empty() && !parseMode(a.mode, config.mode))
     throw CLI::ValidationError("--mode", "expected " + modeNames() + ", got '" + a.mode + "'");
   if (a.solver_time_limit) config.estimator.time_limited = true;
@@ -122,23 +165,41 @@ int runRun(const RunArgs& a) {
   run.feedback_delay = a.feedback_delay >= 0 ? a.feedback_delay : (run.pipelined ? 1 : 0);
   if (run.pipelined && run.feedback_delay != 1)
     throw CLI::ValidationError("--feedback-delay", "a pipelined run (--threads 2) has a feedback delay of 1 frame");
-  pipeline::System system(config, run);
-  Input in = openInput(a.dataset, config, a.groundtruth_topic);
-  std::error_code ec;
-  std::filesystem::create_directories(a.out, ec);
-  if (ec) throw InputError(a.out, "cannot create output folder: " + ec.message());
+  return pipeline::System(config, run);
+}
 
+/// The run's stats.json: written while the run goes (one line per frame) under a temporary name.
+struct StatsFile {
+  explicit StatsFile(const std::string& dir) : path(dir + "/stats.json"), part(path + ".part"), file(part), recorder(file) {
+    if (!file) throw InputError(part, "cannot write file");
+  }
+  void finish(const nlohmann::json& summary) {
+    recorder.finish(summary);
+    file.close();
+    if (!file) throw InputError(part, "write failed");
+    std::error_code ec;
+    std::filesystem::rename(part, path, ec);
+    if (ec) throw InputError(path, "cannot rename " + part + ": " + ec.message());
+  }
+  std::string path, part;
+  std::ofstream file;
+  pipeline::StatsRecorder recorder;
+};
+
+int runRun(const RunArgs& a) {
+  Config config;
+  pipeline::System system = makeSystem(a, config);
+  Input in = openInput(a.dataset, config, a.groundtruth_topic);
+  StagedFolder folder(a.out);  // OUT.partial-PID until complete, then swapped for OUT
   const std::size_t total = a.max_frames ? std::min(a.max_frames, in.source->frameCount()) : in.source->frameCount();
   pipeline::ObservationRecorder observations(in.has_masks, /*keep_observations=*/!a.dump_observations.empty());
-  // stats.json is written while the run goes (one line per frame) and renamed when complete.
-  const std::string stats_path = a.out + "/stats.json", stats_part = stats_path + ".part";
-  std::ofstream stats_file(stats_part);
-  if (!stats_file) throw InputError(stats_part, "cannot write file");
-  pipeline::StatsRecorder stats(stats_file);
+  StatsFile stats(folder.path());
   ProgressObserver progress(system.mode(), total);
   if (in.has_masks || !a.dump_observations.empty()) system.addObserver(observations);
-  system.addObserver(stats);
+  system.addObserver(stats.recorder);
   system.addObserver(progress);
+  std::signal(SIGINT, onStopSignal);  // stop feeding, finish, write a result marked partial
+  std::signal(SIGTERM, onStopSignal);
   const auto wall_start = std::chrono::steady_clock::now();
   const std::size_t frames = drive(*in.source, system, total);
   if (frames == 0) throw InputError(a.dataset, "no stereo frames");
@@ -149,18 +210,21 @@ int runRun(const RunArgs& a) {
   nlohmann::json summary = pipeline::summaryJson(result, system.mode(), wall_s);
   summary["threads"] = system.threads();
   summary["feedback_delay"] = system.runOptions().feedback_delay;
+  const int sig = g_stop_signal;
+  summary["partial"] = sig != 0;  // stopped by a signal: the frames before it only
+  if (sig != 0) summary["stopped_by"] = sig == SIGINT ? "SIGINT" : "SIGTERM";
   if (in.has_masks) summary["classification"] = pipeline::toJson(observations.classify(result));
   if (!a.dump_observations.empty()) observations.writeCsv(a.dump_observations, result);
-  pipeline::writeResultFiles(a.out, result);
+  pipeline::writeResultFiles(folder.path(), result);
   pipeline::addAte(summary, in.groundtruth, result);
   stats.finish(summary);
-  stats_file.close();
-  if (!stats_file) throw InputError(stats_part, "write failed");
-  std::filesystem::rename(stats_part, stats_path, ec);
-  if (ec) throw InputError(stats_path, "cannot rename " + stats_part + ": " + ec.message());
+  folder.publish();
   summary["last_status"] = result.summary.last_status;
   printSummary(summary, a.out);
-  return kOk;
+  if (sig == 0) return kOk;
+  std::fprintf(stderr, "stopped by %s after %zu of %zu frames: %s holds the partial result (summary \"partial\": true)\n",
+               sig == SIGINT ? "SIGINT" : "SIGTERM", frames, total, a.out.c_str());
+  return 128 + sig;
 }
 
 }  // namespace
@@ -172,10 +236,12 @@ void registerRun(CLI::App& app, int& exit_code) {
       "Run stereo-inertial odometry on a EuRoC folder: front end (stereo KLT) and the\n"
       "sliding-window estimator. Writes OUT/trajectory.tum (TUM), OUT/trajectory.csv (EuRoC),\n"
       "OUT/state.csv (pose, velocity, biases; EuRoC ground-truth columns)\n"
-      "and OUT/stats.json (per-frame timing, feature counts, status, resets), and the maps as PLY.\n"
+      "OUT/stats.json (per-frame timing, feature counts, status, resets), OUT/resets.csv, and the maps as PLY.\n"
       "Offline and deterministic: frames are processed in order as fast as possible and each\n"
       "solve stops on max_num_iterations or convergence, never on the clock, so the same input\n"
-      "and config give the same outputs whatever the machine's load (timing fields aside).");
+      "and config give the same outputs whatever the machine's load (timing fields aside).\n"
+      "OUT is written whole (in OUT.partial-PID, swapped in when complete). SIGINT / SIGTERM:\n"
+      "the frames so far are finished and written, marked partial in stats.json; exit 130 / 143.");
   cmd->add_option("-c,--config", a->config, "VINS-Fusion config")->required();
   cmd->add_option("-d,--dataset", a->dataset,
                   "EuRoC folder or ROS1 bag (topics from the config's imu_topic, image0_topic, image1_topic)")

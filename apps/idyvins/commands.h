@@ -29,5 +29,7 @@ void registerConvert(CLI::App& app, int& exit_code);
 
 /// `idyvins bench --suite standard --out DIR [--seeds 1,2,3] [--ablations]`.
 void registerBench(CLI::App& app, int& exit_code);
+/// `idyvins perturb`: a EuRoC folder with one fault (dropouts, time jumps, bad images, IMU spikes).
+void registerPerturb(CLI::App& app, int& exit_code);
 
 }  // namespace idyvins::app

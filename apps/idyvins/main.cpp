@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   registerRun(app, exit_code);
   registerConvert(app, exit_code);
   registerBench(app, exit_code);
+  registerPerturb(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,6 +1,8 @@
 #include "io/euroc_dataset.h"
 
+#include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/error.h"
@@ -172,7 +174,16 @@ cv::Mat loadGrayImage(const ImageRecord& record, const std::string& csv_path, in
                       int expected_height) {
   if (!fs::is_regular_file(record.path))
     throw InputError(csv_path, record.csv_line, "image file missing: " + record.path);
-  cv::Mat image = cv::imread(record.path, cv::IMREAD_GRAYSCALE);
+  // Read here and decoded from memory: a PNG cut short (no IEND chunk at its end) is refused
+  // with one line before libpng would print its own.
+  std::ifstream file(record.path, std::ios::binary);
+  const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  static const unsigned char kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  static const unsigned char kIend[8] = {'I', 'E', 'N', 'D', 0xae, 0x42, 0x60, 0x82};
+  if (bytes.size() >= 8 && std::equal(kPngSignature, kPngSignature + 8, bytes.begin()) &&
+      (bytes.size() < 20 || !std::equal(kIend, kIend + 8, bytes.end() - 8)))
+    throw InputError(csv_path, record.csv_line, "truncated PNG (no IEND chunk at its end): " + record.path);
+  cv::Mat image = bytes.empty() ? cv::Mat() : cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
   if (image.empty())
     throw InputError(csv_path, record.csv_line,
                      "image file unreadable (expected an 8-bit PNG): " + record.path);

@@ -1,0 +1,206 @@
+// `idyvins perturb DATASET OUT --fault KIND`: a copy of a EuRoC folder with one fault a robot
+// meets (sensor dropouts, time jumps, bad images, IMU spikes), to reproduce how idyvins handles
+// it. Unchanged files are hard links to the original's (no space, never written through).
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <optional>
+#include <sstream>
+
+#include "commands.h"
+#include "core/error.h"
+#include "io/euroc_dataset.h"
+
+namespace idyvins::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::vector<std::string> kFaults = {"imu-gap", "silence",   "frame-drop", "time-jump", "desync",
+                                          "duplicate-stamps", "black", "saturated", "frozen",  "corrupt",
+                                          "imu-spike"};
+
+struct PerturbArgs {
+  std::string dataset, out, fault;
+  double at_s = 4.0, duration_s = 0.5, magnitude = 0;
+  int count = 1;
+};
+
+/// A data.csv: its comment lines, and its rows split at commas (field 0 the stamp).
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  static TimeNs stamp(const std::vector<std::string>& row) { return std::stoll(row[0]); }
+};
+
+Csv readCsv(const fs::path& path) {
+  std::ifstream f(path);
+  if (!f) throw InputError(path.string(), "cannot read");
+  Csv csv;
+  for (std::string line; std::getline(f, line);) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) continue;
+    if (line[0] == '#') {
+      csv.header.push_back(line);
+      continue;
+    }
+    std::vector<std::string> fields;
+    std::stringstream ss(line);
+    for (std::string field; std::getline(ss, field, ',');) fields.push_back(field);
+    csv.rows.push_back(fields);
+  }
+  return csv;
+}
+
+/// Replaces a (hard-linked) file by a new one: the original is never written through the link.
+void writeCsv(const fs::path& path, const Csv& csv) {
+  fs::remove(path);
+  std::ofstream f(path);
+  for (const auto& h : csv.header) f << h << '\n';
+  for (const auto& r : csv.rows) {
+    for (std::size_t i = 0; i < r.size(); ++i) f << (i ? "," : "") << r[i];
+    f << '\n';
+  }
+  if (!f) throw InputError(path.string(), "cannot write");
+}
+
+/// Edits one data.csv in place (its rows, in order); a missing file is left alone.
+void editCsv(const fs::path& path, const std::function<void(Csv&)>& edit) {
+  if (!fs::exists(path)) return;
+  Csv csv = readCsv(path);
+  edit(csv);
+  writeCsv(path, csv);
+}
+
+void dropRows(Csv& csv, const std::function<bool(TimeNs)>& drop) {
+  std::vector<std::vector<std::string>> kept;
+  for (auto& r : csv.rows)
+    if (!drop(Csv::stamp(r))) kept.push_back(std::move(r));
+  csv.rows = std::move(kept);
+}
+
+void shiftRows(Csv& csv, const std::function<bool(TimeNs)>& which, TimeNs by) {
+  for (auto& r : csv.rows)
+    if (which(Csv::stamp(r))) r[0] = std::to_string(Csv::stamp(r) + by);
+}
+
+/// Rewrites the images of cam0 and cam1 whose stamps `which` selects.
+void editImages(const fs::path& mav0, const std::function<bool(TimeNs)>& which,
+                const std::function<void(const fs::path&, int cam)>& edit) {
+  for (int cam = 0; cam < 2; ++cam) {
+    const fs::path dir = mav0 / ("cam" + std::to_string(cam));
+    if (!fs::exists(dir / "data.csv")) continue;
+    for (const auto& r : readCsv(dir / "data.csv").rows)
+      if (r.size() >= 2 && which(Csv::stamp(r))) edit(dir / "data" / r[1], cam);
+  }
+}
+
+void replaceImage(const fs::path& path, const cv::Mat& image) {
+  fs::remove(path);
+  if (!cv::imwrite(path.string(), image)) throw InputError(path.string(), "cannot write image");
+}
+
+void applyImageFault(const PerturbArgs& a, const fs::path& mav0, const std::function<bool(TimeNs)>& in_window) {
+  std::optional<cv::Mat> frozen[2];
+  editImages(mav0, in_window, [&](const fs::path& p, int cam) {
+    if (a.fault == "corrupt") {  // the PNG cut in half, as a write interrupted mid-file
+      const auto size = fs::file_size(p);
+      std::ifstream in(p, std::ios::binary);
+      std::string bytes(size / 2, '\0');
+      in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+      in.close();
+      fs::remove(p);
+      std::ofstream(p, std::ios::binary) << bytes;
+      return;
+    }
+    const cv::Mat img = cv::imread(p.string(), cv::IMREAD_UNCHANGED);
+    if (img.empty()) throw InputError(p.string(), "cannot read image");
+    if (a.fault == "black") replaceImage(p, cv::Mat::zeros(img.size(), img.type()));
+    else if (a.fault == "saturated") replaceImage(p, cv::Mat(img.size(), img.type(), cv::Scalar::all(255)));
+    else if (a.fault == "frozen") {  // the first image of the window, again and again
+      if (!frozen[cam]) frozen[cam] = img;
+      else replaceImage(p, *frozen[cam]);
+    }
+  });
+}
+
+void applyFault(const PerturbArgs& a, const fs::path& mav0, TimeNs t0) {
+  const TimeNs at = t0 + static_cast<TimeNs>(a.at_s * 1e9), end = at + static_cast<TimeNs>(a.duration_s * 1e9);
+  const auto in_window = [&](TimeNs t) { return t >= at && t < end; };
+  const auto from_at = [&](TimeNs t) { return t >= at; };
+  const fs::path imu = mav0 / "imu0" / "data.csv", cam0 = mav0 / "cam0" / "data.csv", cam1 = mav0 / "cam1" / "data.csv";
+  const auto cams = [&](const std::function<void(Csv&)>& edit) { editCsv(cam0, edit), editCsv(cam1, edit); };
+  const std::string& f = a.fault;
+  if (f == "imu-gap" || f == "silence") editCsv(imu, [&](Csv& c) { dropRows(c, in_window); });
+  if (f == "silence") cams([&](Csv& c) { dropRows(c, in_window); });
+  if (f == "frame-drop") {  // `count` frames from `at` on, both cameras
+    cams([&](Csv& c) {
+      int left = a.count;
+      dropRows(c, [&](TimeNs t) { return t >= at && left-- > 0; });
+    });
+  }
+  if (f == "time-jump") {
+    const TimeNs by = static_cast<TimeNs>(a.magnitude * 1e9);
+    for (const auto& p : {imu, cam0, cam1, mav0 / "state_groundtruth_estimate0" / "data.csv"})
+      editCsv(p, [&](Csv& c) { shiftRows(c, from_at, by); });
+  }
+  if (f == "desync") editCsv(cam1, [&](Csv& c) { shiftRows(c, [](TimeNs) { return true; }, static_cast<TimeNs>(a.magnitude * 1e6)); });
+  if (f == "duplicate-stamps") {  // each frame of the window stamped like the one before it
+    cams([&](Csv& c) {
+      for (std::size_t i = 1; i < c.rows.size(); ++i)
+        if (in_window(Csv::stamp(c.rows[i]))) c.rows[i][0] = c.rows[i - 1][0];
+    });
+  }
+  if (f == "imu-spike") {  // `count` samples from `at` on with `magnitude` m/s^2 more on x
+    editCsv(imu, [&](Csv& c) {
+      int left = a.count;
+      for (auto& r : c.rows)
+        if (Csv::stamp(r) >= at && left-- > 0) r[4] = std::to_string(std::stod(r[4]) + a.magnitude);
+    });
+  }
+  if (f == "black" || f == "saturated" || f == "frozen" || f == "corrupt") applyImageFault(a, mav0, in_window);
+}
+
+int runPerturb(const PerturbArgs& a) {
+  const io::EurocDataset ds = io::readEurocDataset(a.dataset);  // validated before anything is written
+  if (ds.cam0.empty()) throw InputError(a.dataset, "no cam0 images");
+  if (fs::exists(a.out)) throw InputError(a.out, "already exists; perturb writes a new folder");
+  fs::copy(a.dataset, a.out, fs::copy_options::recursive | fs::copy_options::create_hard_links);
+  const fs::path mav0 = fs::path(ds.root).filename() == "mav0" ? fs::path(a.out) / "mav0" : fs::path(a.out);
+  applyFault(a, mav0, ds.cam0.front().t_ns);
+  const nlohmann::json what = {{"source", a.dataset},  {"fault", a.fault},       {"at_s", a.at_s},
+                               {"duration_s", a.duration_s}, {"count", a.count}, {"magnitude", a.magnitude}};
+  std::ofstream(fs::path(a.out) / "perturb.json") << what.dump(1) << '\n';
+  std::printf("wrote %s: %s at %.3f s into the sequence\n", a.out.c_str(), a.fault.c_str(), a.at_s);
+  return kOk;
+}
+
+}  // namespace
+
+void registerPerturb(CLI::App& app, int& exit_code) {
+  auto a = std::make_shared<PerturbArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "perturb",
+      "Copy a EuRoC folder with one fault, to reproduce how idyvins handles it (unchanged files are\n"
+      "hard links). Times are seconds from the first cam0 image. Faults: imu-gap and silence (IMU, or\n"
+      "IMU and cameras, lose [at, at+duration)); frame-drop (COUNT stereo frames from at: 1 single, more\n"
+      "a burst); time-jump (every stamp from at on moves by MAGNITUDE s, cameras, IMU and ground truth;\n"
+      "negative: backwards); desync (cam1 stamps moved by MAGNITUDE ms); duplicate-stamps (frames of the\n"
+      "window stamped like the one before); black, saturated, frozen (images of the window), corrupt\n"
+      "(their PNG files cut in half); imu-spike (COUNT samples from at get MAGNITUDE m/s^2 more on x).\n"
+      "Writes OUT/perturb.json with the fault.");
+  cmd->add_option("dataset", a->dataset, "EuRoC folder")->required();
+  cmd->add_option("out", a->out, "new folder")->required();
+  cmd->add_option("--fault", a->fault, "the fault")->required()->check(CLI::IsMember(kFaults));
+  cmd->add_option("--at", a->at_s, "s from the first cam0 image (default 4)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--duration", a->duration_s, "s (default 0.5)")->check(CLI::PositiveNumber);
+  cmd->add_option("--count", a->count, "frames or samples (default 1)")->check(CLI::PositiveNumber);
+  cmd->add_option("--magnitude", a->magnitude, "time-jump: s; desync: ms; imu-spike: m/s^2");
+  cmd->callback([a, &exit_code] { exit_code = runPerturb(*a); });
+}
+
+}  // namespace idyvins::app

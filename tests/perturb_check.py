@@ -1,0 +1,122 @@
+#!/usr/bin/python3
+"""`idyvins perturb` faults run through `idyvins run` (CTest; the README's fault table comes from
+`perturb_check.py IDYVINS WORK --table`).
+
+An 8 s city-mid sequence; each fault at 4 s. Faults a robot must live with: the run completes, every
+reset is reported with its cause, the trajectory is one piece (no step between consecutive poses more
+than 0.2 m beyond what the truth moved) and the ATE over the whole file stays under 0.1 m (fault-free:
+printed). Faults that make the data invalid (stamps going backwards or repeated, corrupt images):
+one clear line and exit 1. IMU spikes within imu_max_acc are a known limitation: reported only.
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+# (name, perturb arguments, expected: "ok" or the text of the one-line error)
+CASES = [
+    ("none", None, "ok"),
+    ("imu-gap 0.5 s", ["--fault", "imu-gap", "--duration", "0.5"], "ok"),
+    ("cameras and IMU silent 0.5 s", ["--fault", "silence", "--duration", "0.5"], "ok"),
+    ("1 frame dropped", ["--fault", "frame-drop", "--count", "1"], "ok"),
+    ("10 frames dropped (burst)", ["--fault", "frame-drop", "--count", "10"], "ok"),
+    ("time jump +2 s", ["--fault", "time-jump", "--magnitude", "2"], "ok"),
+    ("time jump -2 s", ["--fault", "time-jump", "--magnitude", "-2"], "non-increasing time stamp"),
+    ("right camera 0.5 ms late", ["--fault", "desync", "--magnitude", "0.5"], "ok"),
+    ("duplicated stamps 0.2 s", ["--fault", "duplicate-stamps", "--duration", "0.2"], "duplicate time stamp"),
+    ("black images 1 s", ["--fault", "black", "--duration", "1"], "ok"),
+    ("saturated images 0.5 s", ["--fault", "saturated", "--duration", "0.5"], "ok"),
+    ("frozen images 0.5 s", ["--fault", "frozen", "--duration", "0.5"], "ok"),
+    # Known limitation (README): a 25 ms spike of 10 g, within imu_max_acc, is integrated; reported, not asserted.
+    ("IMU spikes: 5 samples +100 m/s^2", ["--fault", "imu-spike", "--count", "5", "--magnitude", "100"], "report"),
+    ("IMU spikes: 5 samples +1000 m/s^2", ["--fault", "imu-spike", "--count", "5", "--magnitude", "1000"], "ok"),
+    ("corrupt PNGs 0.1 s", ["--fault", "corrupt", "--duration", "0.1"], "truncated PNG"),
+]
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what, flush=True)
+    if not cond:
+        failures.append(what)
+
+
+def tum(path):
+    return [[float(x) for x in l.split()] for l in open(path) if l.strip() and not l.startswith("#")]
+
+
+def largest_excess(est, gt_csv):
+    gt = [[float(x) for x in l.split(",")[:4]] for l in open(gt_csv) if l.strip() and not l.startswith("#")]
+    gt = [(r[0] * 1e-9, r[1:4]) for r in gt]
+
+    def at(t):
+        lo, hi = 0, len(gt) - 1
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if gt[mid][0] < t:
+                lo = mid + 1
+            else:
+                hi = mid
+        return gt[lo][1]
+
+    def dist(a, b):
+        return sum((x - y) ** 2 for x, y in zip(a, b)) ** 0.5
+    return max([dist(b[1:4], a[1:4]) - dist(at(b[0]), at(a[0])) for a, b in zip(est, est[1:])] or [0.0])
+
+
+def main(idy, work, table):
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    seq = os.path.join(work, "seq")
+    r = subprocess.run([idy, "simulate", "--scene", "city", "--level", "mid", "--seed", "5", "--duration", "8", "--out",
+                        seq], capture_output=True, text=True)
+    check(r.returncode == 0, "simulate")
+    cfg = os.path.join(seq, "config", "sim_stereo_imu_config.yaml")
+    rows = []
+    for name, args, expect in CASES:
+        data = seq
+        if args:
+            data = os.path.join(work, name.split()[0] + "_" + str(len(rows)))
+            p = subprocess.run([idy, "perturb", seq, data] + args, capture_output=True, text=True)
+            check(p.returncode == 0, "perturb %s: %s" % (name, p.stderr.strip()[-200:]))
+        out = data + "_out"
+        r = subprocess.run([idy, "run", "-c", cfg, "-d", data, "-o", out, "--mode", "idy"], capture_output=True,
+                           text=True)
+        if expect not in ("ok", "report"):
+            lines = [l for l in r.stderr.strip().split("\n") if l]
+            check(r.returncode == 1 and len(lines) == 1 and expect in lines[0],
+                  "%s: exit 1, one line naming the problem (%s)" % (name, lines[-1][-150:] if lines else ""))
+            rows.append((name, "refused (exit 1): " + (lines[-1].split(": ", 1)[-1][:90] if lines else ""), "", "", ""))
+            continue
+        check(r.returncode == 0, "%s: run completes (%s)" % (name, r.stderr.strip()[-200:]))
+        if r.returncode != 0:
+            continue
+        s = json.load(open(os.path.join(out, "stats.json")))["summary"]
+        excess = largest_excess(tum(os.path.join(out, "trajectory.tum")),
+                                os.path.join(data, "mav0", "state_groundtruth_estimate0", "data.csv"))
+        resets = "; ".join("%s -> %s" % (x["why"], x["continued_by"] or "not resumed") for x in s["resets"]) or "none"
+        segs = ", ".join("%.3f" % g["ate_rmse_m"] for g in s.get("segments", []) if g["ate_rmse_m"] is not None)
+        rows.append((name, resets, "%.3f m" % s["ate_rmse_m"], segs, "%.2f m" % excess))
+        if expect == "report":
+            print("report %s: ATE %.3f m, largest step beyond the truth's %.2f m (not asserted: known limitation)"
+                  % (name, s["ate_rmse_m"], excess))
+            continue
+        check(s["ate_rmse_m"] < 0.1, "%s: ATE over the whole file %.3f m < 0.1 m" % (name, s["ate_rmse_m"]))
+        check(excess < 0.2, "%s: one piece (largest step beyond the truth's %.3f m)" % (name, excess))
+        check(all(x["resumed_t_ns"] >= 0 for x in s["resets"]), "%s: every reset followed by a new segment" % name)
+        check(r.stdout.count("reset at") == len(s["resets"]), "%s: run prints each reset" % name)
+        dropped = s["imu_samples_dropped"]["out_of_range"]
+        if "1000" in name:
+            check(dropped == 5 and "IMU samples dropped: 5" in r.stdout, "%s: 5 samples dropped and said so" % name)
+    if table:
+        print("| fault (at 4 s) | resets: cause -> how it went on | ATE whole file | ATE per segment | largest step beyond the truth's |")
+        print("| --- | --- | --- | --- | --- |")
+        for row in rows:
+            print("| " + " | ".join(row) + " |")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1], sys.argv[2], "--table" in sys.argv))
