@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS  ?= 2
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release -DIDYVINS_WERROR=ON
 
-.PHONY: all setup build demo test bench clean
+.PHONY: all setup build demo test bench fuzz clean
 
 all: build
 
@@ -22,6 +22,9 @@ test: build
 
 bench: build
 	./scripts/bench.sh $(BUILD)
+
+fuzz: setup
+	./scripts/fuzz.sh $(BUILD)-fuzz
 
 clean:
 	rm -rf $(BUILD)

@@ -423,4 +423,19 @@ TEST(Config, ModeNames) {
 }
 
 }  // namespace
+TEST(Config, FuzzFindingsAreRefusedWithOneClearError) {
+  // Inputs libFuzzer found (scripts/fuzz.sh), kept as regressions: each reader must throw
+  // InputError, nothing else. File names start with the fuzz target's name.
+  int replayed = 0;
+  for (const auto& e : std::filesystem::directory_iterator(IDYVINS_SOURCE_DIR "/tests/fuzz/regressions")) {
+    const std::string name = e.path().filename().string(), path = e.path().string();
+    SCOPED_TRACE(name);
+    if (name.rfind("camera_", 0) == 0) EXPECT_THROW(loadCameraFile(path), InputError);
+    else if (name.rfind("config_", 0) == 0) EXPECT_THROW(loadConfig(path), InputError);
+    else continue;
+    ++replayed;
+  }
+  EXPECT_GE(replayed, 1);
+}
+
 }  // namespace idyvins

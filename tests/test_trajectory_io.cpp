@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include <random>
 
 #include "core/error.h"
@@ -37,6 +39,18 @@ void expectSame(const std::vector<StampedPose>& a, const std::vector<StampedPose
     EXPECT_LT((a[i].p_w_b - b[i].p_w_b).norm(), 1e-8);
     EXPECT_LT(a[i].q_w_b.angularDistance(b[i].q_w_b), 1e-8);
   }
+}
+
+TEST(TrajectoryIo, FuzzFindingsAreRefusedWithOneClearError) {
+  // Inputs libFuzzer found (scripts/fuzz.sh), kept as regressions: InputError, nothing else.
+  int replayed = 0;
+  for (const auto& e : std::filesystem::directory_iterator(IDYVINS_SOURCE_DIR "/tests/fuzz/regressions")) {
+    if (e.path().filename().string().rfind("trajectory_", 0) != 0) continue;
+    SCOPED_TRACE(e.path().string());
+    EXPECT_THROW(readTrajectory(e.path().string()), InputError);
+    ++replayed;
+  }
+  EXPECT_GE(replayed, 1);
 }
 
 TEST(TrajectoryIo, TumRoundTrip) {

@@ -60,6 +60,8 @@ YamlFile loadYaml(const std::string& path) {
 
 YAML::Node require(const YamlFile& f, const YAML::Node& parent, const std::string& key,
                    const std::string& what) {
+  if (parent && !parent.IsMap())  // a scalar or list where a map is expected (found by fuzzing)
+    throw InputError(f.path, lineOf(parent), "expected a map with key '" + key + "' (" + what + ")");
   YAML::Node node = parent[key];
   if (f.keys_read && node && parent == f.root) f.keys_read->push_back(key);
   if (!node) throw InputError(f.path, "missing required key '" + key + "' (" + what + ")");
@@ -153,7 +155,31 @@ std::string modeNames() {
   return s;
 }
 
+// The readers proper; loadCameraFile and loadConfig wrap them.
+camera::CameraParams readCameraFile(const std::string& path);
+Config readConfig(const std::string& path, std::vector<std::string>* keys_read);
+
+namespace {
+
+/// Any yaml-cpp exception a reader lets through (a structure the reader did not expect) as the
+/// one error type readers throw.
+template <typename Read>
+auto refusingYamlErrors(const std::string& path, Read read) {
+  try {
+    return read();
+  } catch (const YAML::Exception& e) {
+    if (e.mark.is_null()) throw InputError(path, "unexpected YAML structure: " + e.msg);
+    throw InputError(path, e.mark.line + 1, "unexpected YAML structure: " + e.msg);
+  }
+}
+
+}  // namespace
+
 camera::CameraParams loadCameraFile(const std::string& path) {
+  return refusingYamlErrors(path, [&] { return readCameraFile(path); });
+}
+
+camera::CameraParams readCameraFile(const std::string& path) {
   const YamlFile f = loadYaml(path);
   camera::CameraParams cam;
   const YAML::Node model_node = require(f, f.root, "model_type", "PINHOLE or KANNALA_BRANDT");
@@ -351,6 +377,10 @@ void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
 }  // namespace
 
 Config loadConfig(const std::string& path, std::vector<std::string>* keys_read) {
+  return refusingYamlErrors(path, [&] { return readConfig(path, keys_read); });
+}
+
+Config readConfig(const std::string& path, std::vector<std::string>* keys_read) {
   YamlFile f = loadYaml(path);
   f.keys_read = keys_read;
   Config c;

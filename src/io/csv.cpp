@@ -62,6 +62,7 @@ std::vector<TableRow> readTable(const std::string& path, const TableOptions& opt
     any_content = true;
     if (t[0] == '#') continue;
     TableRow row{line_no, split(t, options.separator)};
+    if (row.fields.empty()) continue;  // separators only (e.g. a vertical tab; found by fuzzing)
     if (rows.empty() && !looksNumeric(row.fields[0]) && line_no == 1) continue;  // header
     const int n = static_cast<int>(row.fields.size());
     if (n < options.min_columns || (max_cols > 0 && n > max_cols)) {

@@ -1,0 +1,71 @@
+// libFuzzer targets for every reader of user input (`make fuzz`, docs/cli.md#fuzzing). One source,
+// one target per reader (IDYVINS_FUZZ_TARGET): the input is written to a file and read as that
+// reader reads it. A reader may only accept the input or throw InputError (one clear line); any
+// other exception, crash or sanitizer report is a finding.
+
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <unistd.h>
+
+#include "core/error.h"
+#include "io/bag_dataset.h"
+#include "io/config.h"
+#include "io/euroc_dataset.h"
+#include "io/trajectory_io.h"
+
+namespace {
+
+std::string scratch(const char* name) {
+  return "/tmp/idyvins_fuzz_" + std::to_string(::getpid()) + "_" + name;
+}
+
+void writeFile(const std::string& path, const std::uint8_t* data, std::size_t size) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  f.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+}
+
+void readOnce(const std::uint8_t* data, std::size_t size) {
+  using namespace idyvins;
+#if IDYVINS_FUZZ_TARGET == 0  // VINS-Fusion config (its camera files are absent: the reader must say so)
+  const std::string p = scratch("config.yaml");
+  writeFile(p, data, size);
+  loadConfig(p);
+#elif IDYVINS_FUZZ_TARGET == 1  // camodocal camera file
+  const std::string p = scratch("cam.yaml");
+  writeFile(p, data, size);
+  loadCameraFile(p);
+#elif IDYVINS_FUZZ_TARGET == 2  // EuRoC imu0/data.csv
+  const std::string p = scratch("imu.csv");
+  writeFile(p, data, size);
+  io::readImuCsv(p);
+#elif IDYVINS_FUZZ_TARGET == 3  // EuRoC cam0/data.csv
+  const std::string p = scratch("cam.csv");
+  writeFile(p, data, size);
+  io::readImageList(p, "/nonexistent");
+#elif IDYVINS_FUZZ_TARGET == 4  // EuRoC ground truth
+  const std::string p = scratch("gt.csv");
+  writeFile(p, data, size);
+  io::readGroundTruthCsv(p);
+#elif IDYVINS_FUZZ_TARGET == 5  // trajectories for `eval` (TUM or EuRoC CSV, by content)
+  const std::string p = scratch("traj.txt");
+  writeFile(p, data, size);
+  io::readTrajectory(p);
+#elif IDYVINS_FUZZ_TARGET == 6  // ROS1 bags
+  const std::string p = scratch("in.bag");
+  writeFile(p, data, size);
+  io::indexBag(p, io::BagTopics{});
+#endif
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  try {
+    readOnce(data, size);
+  } catch (const idyvins::InputError&) {  // the one allowed way to refuse
+  }
+  return 0;
+}
