@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS  ?= 2
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release -DIDYVINS_WERROR=ON
 
-.PHONY: all setup build demo test bench fuzz clean
+.PHONY: all setup build demo test sanitize bench fuzz clean
 
 all: build
 
@@ -19,6 +19,9 @@ demo: build
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
+
+sanitize: setup
+	./scripts/sanitize.sh $(BUILD)-asan
 
 bench: build
 	./scripts/bench.sh $(BUILD)

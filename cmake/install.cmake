@@ -6,7 +6,7 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-set(IDYVINS_LIBRARY_MODULES core camera imu io frontend dynamic backend eval sim pipeline)
+set(IDYVINS_LIBRARY_MODULES core camera imu io frontend dynamic backend eval sim map pipeline)
 if(IDYVINS_BUILD_BAG)
   list(APPEND IDYVINS_LIBRARY_MODULES bag)
 endif()

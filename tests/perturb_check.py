@@ -24,11 +24,13 @@ CASES = [
     ("10 frames dropped (burst)", ["--fault", "frame-drop", "--count", "10"], "ok"),
     ("time jump +2 s", ["--fault", "time-jump", "--magnitude", "2"], "ok"),
     ("time jump -2 s", ["--fault", "time-jump", "--magnitude", "-2"], "non-increasing time stamp"),
-    ("right camera 0.5 ms late", ["--fault", "desync", "--magnitude", "0.5"], "ok"),
+    ("right camera 0.5 ms late for 0.5 s", ["--fault", "desync", "--magnitude", "0.5"], "ok"),
+    ("right camera 3 ms late for 0.5 s", ["--fault", "desync", "--magnitude", "3"], "ok"),
     ("duplicated stamps 0.2 s", ["--fault", "duplicate-stamps", "--duration", "0.2"], "duplicate time stamp"),
     ("black images 1 s", ["--fault", "black", "--duration", "1"], "ok"),
     ("saturated images 0.5 s", ["--fault", "saturated", "--duration", "0.5"], "ok"),
     ("frozen images 0.5 s", ["--fault", "frozen", "--duration", "0.5"], "ok"),
+    ("salt noise (10 %) 0.5 s", ["--fault", "salt", "--duration", "0.5"], "ok"),
     # Known limitation (README): a 25 ms spike of 10 g, within imu_max_acc, is integrated; reported, not asserted.
     ("IMU spikes: 5 samples +100 m/s^2", ["--fault", "imu-spike", "--count", "5", "--magnitude", "100"], "report"),
     ("IMU spikes: 5 samples +1000 m/s^2", ["--fault", "imu-spike", "--count", "5", "--magnitude", "1000"], "ok"),
@@ -107,6 +109,13 @@ def main(idy, work, table):
         check(excess < 0.2, "%s: one piece (largest step beyond the truth's %.3f m)" % (name, excess))
         check(all(x["resumed_t_ns"] >= 0 for x in s["resets"]), "%s: every reset followed by a new segment" % name)
         check(r.stdout.count("reset at") == len(s["resets"]), "%s: run prints each reset" % name)
+        unpaired = s["unpaired_images"]
+        if "3 ms late" in name:  # 10 frames of the window, each side without its partner
+            check(unpaired["cam0"] == 10 and unpaired["cam1"] == 10 and "without a partner" in r.stdout,
+                  "%s: 10 + 10 unpaired images counted and said so (%s)" % (name, unpaired))
+        else:
+            check(unpaired["cam0"] == 0 and unpaired["cam1"] == 0 and "without a partner" not in r.stdout,
+                  "%s: no unpaired image reported" % name)
         dropped = s["imu_samples_dropped"]["out_of_range"]
         if "1000" in name:
             check(dropped == 5 and "IMU samples dropped: 5" in r.stdout, "%s: 5 samples dropped and said so" % name)

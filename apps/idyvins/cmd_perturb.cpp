@@ -2,6 +2,7 @@
 // meets (sensor dropouts, time jumps, bad images, IMU spikes), to reproduce how idyvins handles
 // it. Unchanged files are hard links to the original's (no space, never written through).
 
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -22,7 +23,7 @@ namespace fs = std::filesystem;
 
 const std::vector<std::string> kFaults = {"imu-gap", "silence",   "frame-drop", "time-jump", "desync",
                                           "duplicate-stamps", "black", "saturated", "frozen",  "corrupt",
-                                          "imu-spike"};
+                                          "salt",      "imu-spike"};
 
 struct PerturbArgs {
   std::string dataset, out, fault;
@@ -121,7 +122,17 @@ void applyImageFault(const PerturbArgs& a, const fs::path& mav0, const std::func
     if (img.empty()) throw InputError(p.string(), "cannot read image");
     if (a.fault == "black") replaceImage(p, cv::Mat::zeros(img.size(), img.type()));
     else if (a.fault == "saturated") replaceImage(p, cv::Mat(img.size(), img.type(), cv::Scalar::all(255)));
-    else if (a.fault == "frozen") {  // the first image of the window, again and again
+    else if (a.fault == "salt") {  // MAGNITUDE (default 10) % of the pixels black or white
+      cv::Mat noisy = img.clone(), u(img.size(), CV_32F);
+      std::uint64_t seed = 1469598103934665603ull + static_cast<std::uint64_t>(cam);  // FNV-1a of the name
+      for (unsigned char ch : p.filename().string()) seed = (seed ^ ch) * 1099511628211ull;
+      cv::RNG rng(seed);
+      rng.fill(u, cv::RNG::UNIFORM, 0.0, 1.0);
+      const double share = (a.magnitude > 0 ? a.magnitude : 10.0) / 100.0;
+      noisy.setTo(cv::Scalar::all(0), u < share / 2);
+      noisy.setTo(cv::Scalar::all(255), (u >= share / 2) & (u < share));
+      replaceImage(p, noisy);
+    } else if (a.fault == "frozen") {  // the first image of the window, again and again
       if (!frozen[cam]) frozen[cam] = img;
       else replaceImage(p, *frozen[cam]);
     }
@@ -148,7 +159,7 @@ void applyFault(const PerturbArgs& a, const fs::path& mav0, TimeNs t0) {
     for (const auto& p : {imu, cam0, cam1, mav0 / "state_groundtruth_estimate0" / "data.csv"})
       editCsv(p, [&](Csv& c) { shiftRows(c, from_at, by); });
   }
-  if (f == "desync") editCsv(cam1, [&](Csv& c) { shiftRows(c, [](TimeNs) { return true; }, static_cast<TimeNs>(a.magnitude * 1e6)); });
+  if (f == "desync") editCsv(cam1, [&](Csv& c) { shiftRows(c, in_window, static_cast<TimeNs>(a.magnitude * 1e6)); });
   if (f == "duplicate-stamps") {  // each frame of the window stamped like the one before it
     cams([&](Csv& c) {
       for (std::size_t i = 1; i < c.rows.size(); ++i)
@@ -162,7 +173,8 @@ void applyFault(const PerturbArgs& a, const fs::path& mav0, TimeNs t0) {
         if (Csv::stamp(r) >= at && left-- > 0) r[4] = std::to_string(std::stod(r[4]) + a.magnitude);
     });
   }
-  if (f == "black" || f == "saturated" || f == "frozen" || f == "corrupt") applyImageFault(a, mav0, in_window);
+  if (f == "black" || f == "saturated" || f == "frozen" || f == "corrupt" || f == "salt")
+    applyImageFault(a, mav0, in_window);
 }
 
 int runPerturb(const PerturbArgs& a) {
@@ -189,9 +201,10 @@ void registerPerturb(CLI::App& app, int& exit_code) {
       "hard links). Times are seconds from the first cam0 image. Faults: imu-gap and silence (IMU, or\n"
       "IMU and cameras, lose [at, at+duration)); frame-drop (COUNT stereo frames from at: 1 single, more\n"
       "a burst); time-jump (every stamp from at on moves by MAGNITUDE s, cameras, IMU and ground truth;\n"
-      "negative: backwards); desync (cam1 stamps moved by MAGNITUDE ms); duplicate-stamps (frames of the\n"
-      "window stamped like the one before); black, saturated, frozen (images of the window), corrupt\n"
-      "(their PNG files cut in half); imu-spike (COUNT samples from at get MAGNITUDE m/s^2 more on x).\n"
+      "negative: backwards); desync (cam1 stamps of the window moved by MAGNITUDE ms; beyond 1 ms the\n"
+      "frames lose their partner); duplicate-stamps (frames of the window stamped like the one before);\n"
+      "black, saturated, frozen (images of the window), salt (MAGNITUDE %, default 10, of their pixels\n"
+      "black or white), corrupt (their PNG files cut in half); imu-spike (COUNT samples from at get MAGNITUDE m/s^2 more on x).\n"
       "Writes OUT/perturb.json with the fault.");
   cmd->add_option("dataset", a->dataset, "EuRoC folder")->required();
   cmd->add_option("out", a->out, "new folder")->required();

@@ -119,6 +119,10 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
     std::printf("warning: IMU samples dropped: %zu not finite or beyond imu_max_acc / imu_max_gyr, %zu not after "
                 "the previous sample's time\n",
                 dropped["out_of_range"].get<std::size_t>(), dropped["out_of_order"].get<std::size_t>());
+  if (const auto& u = s["unpaired_images"]; u["cam0"].get<std::size_t>() + u["cam1"].get<std::size_t>() > 0)
+    std::printf("warning: stereo images without a partner within 1 ms, not processed: %zu left (cam0), %zu right "
+                "(cam1)\n",
+                u["cam0"].get<std::size_t>(), u["cam1"].get<std::size_t>());
   if (s["frames_beyond_imu"].get<std::size_t>() > 0)
     std::printf("warning: %zu frame(s) at the end not processed: their time (stamp + td) is after the last IMU sample\n",
                 s["frames_beyond_imu"].get<std::size_t>());
@@ -210,6 +214,7 @@ int runRun(const RunArgs& a) {
   nlohmann::json summary = pipeline::summaryJson(result, system.mode(), wall_s);
   summary["threads"] = system.threads();
   summary["feedback_delay"] = system.runOptions().feedback_delay;
+  summary["unpaired_images"] = {{"cam0", in.unpaired_cam0}, {"cam1", in.unpaired_cam1}};
   const int sig = g_stop_signal;
   summary["partial"] = sig != 0;  // stopped by a signal: the frames before it only
   if (sig != 0) summary["stopped_by"] = sig == SIGINT ? "SIGINT" : "SIGTERM";

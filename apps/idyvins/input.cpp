@@ -23,6 +23,8 @@ Input openInput(const std::string& dataset, const Config& config, const std::str
     if (in.has_masks)
       colors = io::readSegmentationColors(config.segmentation_rgb_ids, config.segmentation_vehicle_ids);
     for (const auto& g : index.dataset.groundtruth) in.groundtruth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
+    in.unpaired_cam0 = index.dataset.unmatched0.size();
+    in.unpaired_cam1 = index.dataset.unmatched1.size();
     in.source =
         std::make_unique<io::BagSource>(std::move(index), config.image_width, config.image_height, std::move(colors));
     return in;
@@ -30,6 +32,8 @@ Input openInput(const std::string& dataset, const Config& config, const std::str
   io::EurocDataset ds = io::readEurocDataset(dataset);
   Input in;
   for (const auto& g : ds.groundtruth) in.groundtruth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
+  in.unpaired_cam0 = ds.unmatched0.size();
+  in.unpaired_cam1 = ds.unmatched1.size();
   in.has_masks =
       masks && !ds.cam0.empty() && std::filesystem::is_directory(std::filesystem::path(ds.root) / "cam0" / "mask");
   if (pipeline::traitsOf(config.mode).needs_masks && !in.has_masks)

@@ -17,6 +17,8 @@ struct Input {
   std::unique_ptr<io::DataSource> source;
   std::vector<StampedPose> groundtruth;
   bool has_masks = false;  ///< the frames carry ground-truth masks (left_mask)
+  /// Left / right images without a partner within the pairing tolerance (not processed).
+  std::size_t unpaired_cam0 = 0, unpaired_cam1 = 0;
 };
 
 /// Opens `dataset` (a EuRoC folder or a ROS1 bag) for `config`. Masks are read when the

@@ -37,6 +37,14 @@ void Driver::onImu(const sensor_msgs::ImuConstPtr& msg) {
   s.gyr_b = {msg->angular_velocity.x, msg->angular_velocity.y, msg->angular_velocity.z};
   s.acc_b = {msg->linear_acceleration.x, msg->linear_acceleration.y, msg->linear_acceleration.z};
   std::lock_guard<std::mutex> lock(mutex_);
+  if (s.t_ns <= last_imu_ns_) {  // a clock that went back (bag looped, driver restarted): say so
+    ++counts_.imu_backwards;
+    ROS_WARN_THROTTLE(5, "idyvins: IMU time went back %.3f s (%zu samples so far not after their predecessor; "
+                      "they are dropped; restart the node after a clock reset)",
+                      1e-9 * static_cast<double>(last_imu_ns_ - s.t_ns), counts_.imu_backwards);
+  } else {
+    last_imu_ns_ = s.t_ns;
+  }
   push(s);
 }
 
@@ -57,7 +65,14 @@ void Driver::onImage(int camera, const sensor_msgs::ImageConstPtr& msg) {
     ++counts_.bad_images;
     return;
   }
-  sync_.add(camera, static_cast<TimeNs>(msg->header.stamp.toNSec()), gray);
+  const TimeNs t_ns = static_cast<TimeNs>(msg->header.stamp.toNSec());
+  if (t_ns <= last_image_ns_[camera])
+    ROS_WARN_THROTTLE(5, "idyvins: camera %d time went back %.3f s (%zu images so far not after their predecessor; "
+                      "they are dropped; restart the node after a clock reset)",
+                      camera, 1e-9 * static_cast<double>(last_image_ns_[camera] - t_ns), sync_.outOfOrder(camera) + 1);
+  else
+    last_image_ns_[camera] = t_ns;
+  sync_.add(camera, t_ns, gray);
   while (auto pair = sync_.next()) {
     arrival_[pair->t_ns] = std::chrono::steady_clock::now();
     ++counts_.frames_in;

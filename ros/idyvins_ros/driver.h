@@ -37,6 +37,7 @@ struct InputCounts {
   std::size_t unpaired[2] = {0, 0};     ///< images without a partner (left, right)
   std::size_t out_of_order[2] = {0, 0}; ///< images not after their camera's previous one
   std::size_t bad_images = 0;           ///< wrong size or encoding
+  std::size_t imu_backwards = 0;        ///< IMU messages not after the previous one (dropped by the system)
 };
 
 class Driver {
@@ -74,6 +75,7 @@ class Driver {
   std::size_t queued_frames_ = 0;
   std::map<TimeNs, SteadyTime> arrival_;  ///< when each queued pair was formed
   InputCounts counts_;
+  TimeNs last_imu_ns_ = -1, last_image_ns_[2] = {-1, -1};  ///< for the backward-time warnings
   bool stopping_ = false;
   std::string error_;
   std::thread worker_;

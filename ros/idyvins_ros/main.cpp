@@ -73,6 +73,7 @@ nlohmann::json nodeSummary(const idyvins::ros_node::Driver& driver) {
           {"frames_dropped_queue_full", c.frames_dropped},
           {"images_unpaired", {c.unpaired[0], c.unpaired[1]}},
           {"images_out_of_order", {c.out_of_order[0], c.out_of_order[1]}},
+          {"imu_backwards", c.imu_backwards},
           {"images_bad", c.bad_images},
           {"latency_median_ms", percentile(ms, 0.5)},
           {"latency_p95_ms", percentile(ms, 0.95)},

@@ -20,6 +20,7 @@
 #include <set>
 
 #include "core/error.h"
+#include "io/bag_structure.h"
 
 namespace idyvins::io {
 
@@ -37,6 +38,14 @@ TimeNs stampNs(const ros::Time& t) { return static_cast<TimeNs>(t.sec) * 1'000'0
 
 void openBag(rosbag::Bag& bag, const std::string& path) {
   if (!std::filesystem::is_regular_file(path)) throw InputError(path, "no such bag file");
+  {  // rosbag_storage trusts the lengths in the file: check them first
+    std::ifstream in(path, std::ios::binary);
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (!in || ec) throw InputError(path, "cannot open");
+    if (const auto problem = bagStructureProblem(in, size))
+      throw InputError(path, "not a readable ROS1 bag (truncated or damaged?): " + *problem);
+  }
   try {
     bag.open(path, rosbag::bagmode::Read);
   } catch (const rosbag::BagUnindexedException&) {

@@ -1,0 +1,109 @@
+#pragma once
+// The 4-DoF pose graph of loop closure (DESIGN §7): keyframe positions and yaws are free,
+// roll and pitch stay as the odometry estimated them (observable from gravity). Odometry
+// edges tie each keyframe to its predecessors, loop edges to the keyframe a place was
+// recognised in; loop edges carry a robust loss so one wrong loop cannot bend the graph.
+
+#include <ceres/sized_cost_function.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <vector>
+
+#include "core/time.h"
+
+namespace idyvins::map {
+
+/// Yaw (rad, about world z) of a body-to-world rotation, ZYX convention: q = Rz(yaw) Ry(pitch) Rx(roll).
+double yawOf(const Eigen::Quaterniond& q_w_b);
+/// Rotation about z by `yaw` rad.
+Eigen::Matrix3d rotZ(double yaw);
+/// `angle` wrapped to (-pi, pi].
+double wrapAngle(double angle);
+
+/// A relative pose in 4-DoF: translation of `to` in `from`'s body frame, yaw(to) - yaw(from).
+struct RelativePose4 {
+  Eigen::Vector3d t_from_to = Eigen::Vector3d::Zero();
+  double dyaw = 0;
+};
+/// The 4-DoF relative pose between two full poses (roll and pitch of `from` kept in the translation).
+RelativePose4 relativePose4(const Eigen::Vector3d& p_w_from, const Eigen::Quaterniond& q_w_from,
+                            const Eigen::Vector3d& p_w_to, const Eigen::Quaterniond& q_w_to);
+
+/// Residual of one edge i -> j, weighted: [ (R_i^T (p_j - p_i) - t_ij) / sigma_t ; wrap(yaw_j - yaw_i - dyaw_ij) / sigma_yaw ]
+/// with R_i = Rz(yaw_i) * tilt_i, tilt_i = Ry(pitch_i) Rx(roll_i) fixed. Parameters: p_i (3), yaw_i (1), p_j (3), yaw_j (1).
+class FourDofEdgeCost final : public ceres::SizedCostFunction<4, 3, 1, 3, 1> {
+ public:
+  FourDofEdgeCost(const RelativePose4& measured, const Eigen::Matrix3d& tilt_i, double sigma_t, double sigma_yaw);
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
+
+ private:
+  RelativePose4 measured_;
+  Eigen::Matrix3d tilt_i_;
+  double w_t_, w_yaw_;
+};
+
+struct PoseGraphOptions {
+  int odometry_neighbours = 4;   ///< odometry edges from each keyframe to this many predecessors (VINS-Fusion: 4)
+  double odometry_sigma_t = 0.1;     ///< m
+  double odometry_sigma_yaw = 0.01;  ///< rad
+  double loop_sigma_t = 0.1;         ///< m
+  double loop_sigma_yaw = 0.01;      ///< rad
+  double loop_huber = 1.0;           ///< Huber threshold of loop edges, in sigmas
+  int max_iterations = 50;
+};
+
+/// One keyframe in the graph: its odometry pose and its corrected pose.
+struct PoseGraphNode {
+  TimeNs t_ns = 0;
+  Eigen::Vector3d p_odom = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q_odom = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();  ///< corrected position
+  double yaw = 0;                               ///< corrected yaw
+  bool fixed = false;                           ///< held during optimization (the first node, a loaded map)
+};
+
+struct LoopEdge {
+  std::size_t from = 0, to = 0;  ///< node indices, from the older keyframe to the newer
+  RelativePose4 measured;
+};
+
+struct PoseGraphSolve {
+  int iterations = 0;
+  double initial_cost = 0, final_cost = 0;
+  bool converged = false;
+};
+
+/// The graph. Not thread-safe; the system solves it on its own thread from a copy.
+class PoseGraph {
+ public:
+  explicit PoseGraph(const PoseGraphOptions& options = {});
+
+  /// Appends a keyframe with its odometry pose; its corrected pose starts as the odometry
+  /// pose moved by the current drift correction. Returns its index.
+  std::size_t addKeyframe(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom);
+  void addLoop(const LoopEdge& loop);
+  void setFixed(std::size_t node, bool fixed);
+
+  /// Optimizes positions and yaws (deterministic: one thread, fixed iteration limit).
+  PoseGraphSolve optimize();
+
+  const std::vector<PoseGraphNode>& nodes() const { return nodes_; }
+  const std::vector<LoopEdge>& loops() const { return loops_; }
+  /// Corrected full pose of node i (its odometry roll and pitch, corrected yaw and position).
+  void correctedPose(std::size_t i, Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const;
+  /// The drift correction of the newest node (corrected = Rz(dyaw) * odometry + dp), applied
+  /// to odometry poses newer than the last optimization.
+  void correct(const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom, Eigen::Vector3d& p_w_b,
+               Eigen::Quaterniond& q_w_b) const;
+
+ private:
+  PoseGraphOptions options_;
+  std::vector<PoseGraphNode> nodes_;
+  std::vector<LoopEdge> loops_;
+  double drift_yaw_ = 0;
+  Eigen::Vector3d drift_p_ = Eigen::Vector3d::Zero();
+};
+
+}  // namespace idyvins::map
