@@ -40,7 +40,7 @@ install(FILES ${PROJECT_BINARY_DIR}/idyvinsConfig.cmake ${PROJECT_BINARY_DIR}/id
 
 # pkg-config: the libraries in link order (each before what it uses).
 set(IDYVINS_PC_LIBS "")
-foreach(module pipeline sim eval backend dynamic frontend io imu camera core)
+foreach(module pipeline sim eval map backend dynamic frontend io imu camera core)
   string(APPEND IDYVINS_PC_LIBS " -lidyvins_${module}")
 endforeach()
 configure_file(${PROJECT_SOURCE_DIR}/cmake/idyvins.pc.in ${PROJECT_BINARY_DIR}/idyvins.pc @ONLY)

@@ -16,6 +16,8 @@ PACKAGES=(
   python3-rosbag python3-sensor-msgs python3-nav-msgs python3-geometry-msgs
   # the ROS1 node idyvins_ros and its test: roscpp, tf2, cv_bridge, roscore, rosbag play / record
   libroscpp-dev libtf2-ros-dev libcv-bridge-dev libstd-msgs-dev ros-core python3-rospy python3-rosgraph
+  # loop closure: place recognition over binary descriptors (faiss; it links OpenMP and BLAS)
+  libfaiss-dev
   # make fuzz: libFuzzer and the sanitizers' runtime
   clang libclang-rt-14-dev
 )
