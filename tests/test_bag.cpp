@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <unistd.h>
 
 #include "core/error.h"
 #include "io/bag_dataset.h"
@@ -30,12 +31,16 @@ std::string smallBag(const std::string& compression) {
   ds.pairs.erase(std::remove_if(ds.pairs.begin(), ds.pairs.end(),
                                 [](const StereoPair& p) { return p.i0 >= 4 || p.i1 >= 4; }),
                  ds.pairs.end());
-  const std::string path = ::testing::TempDir() + "/small_" + compression + ".bag";
+  // per process: another build's tests may write the same name at the same time
+  const std::string path =
+      ::testing::TempDir() + "/idyvins_small_" + std::to_string(::getpid()) + "_" + compression + ".bag";
   BagWriteOptions options;
   options.compression = compression;
   writeViodeBag(ds, path, options);
   std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
+  std::string bytes(std::istreambuf_iterator<char>(in), {});
+  std::filesystem::remove(path);
+  return bytes;
 }
 
 TEST(BagStructure, WrittenBagsAreWellFormed) {

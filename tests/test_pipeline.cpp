@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -33,9 +35,15 @@ class OrderObserver final : public FrameObserver {
     EXPECT_EQ(out.t_ns, input.t_ns);
     ++frames;
     streamed_static.insert(streamed_static.end(), out.new_static_points.begin(), out.new_static_points.end());
+    if (const auto& kf = out.estimate.left_window) {
+      ++keyframes_left;
+      for (const auto& o : kf->observations)
+        (o.label == FeatureLabel::kStatic ? left_static : left_not_static).insert({kf->t_ns, o.id});
+    }
   }
-  std::size_t frames = 0;
+  std::size_t frames = 0, keyframes_left = 0;
   std::vector<backend::MapPoint> streamed_static;
+  std::set<std::pair<TimeNs, std::uint64_t>> left_static, left_not_static;  ///< (keyframe time, landmark id)
 };
 
 struct SceneRun {
@@ -45,6 +53,8 @@ struct SceneRun {
   std::size_t observed_frames = 0, outputs_with_pose = 0;
   std::size_t polled = 0;  ///< frames System::poll() processed
   std::vector<backend::MapPoint> streamed_static;  ///< FrameOutput::new_static_points, in order
+  std::size_t keyframes_left = 0;  ///< FrameResult::left_window events
+  std::set<std::pair<TimeNs, std::uint64_t>> left_static, left_not_static;
 };
 
 /// Runs a rendered city-high sequence. Offline order: each frame after the IMU samples up
@@ -52,7 +62,9 @@ struct SceneRun {
 /// those samples, System::poll() after every sample.
 SceneRun runScene(Mode mode, double duration_s, const RunOptions& run_options = {},
                   const std::function<void(std::vector<ImuSample>&)>& corrupt_imu = {}, bool live = false,
-                  const std::function<bool(StereoFrame&)>& corrupt_frame = {}) {
+                  const std::function<bool(StereoFrame&)>& corrupt_frame = {},
+                  const std::function<void(Config&)>& configure = {},
+                  const std::function<void(const System&)>& inspect = {}) {
   sim::SimOptions o;
   o.scene.scene = "city";
   o.scene.level = sim::Level::kHigh;
@@ -66,6 +78,7 @@ SceneRun runScene(Mode mode, double duration_s, const RunOptions& run_options = 
   Config config = scene.rig();
   config.estimator.max_solver_time_s = 1000;  // iterations, not the wall clock, end each solve
   config.mode = mode;
+  if (configure) configure(config);
 
   System system(config, run_options);
   ObservationRecorder recorder(/*has_masks=*/true);
@@ -96,9 +109,13 @@ SceneRun runScene(Mode mode, double duration_s, const RunOptions& run_options = 
   }
   for (const auto& g : gt) run.truth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
   run.result = system.finish();
+  if (inspect) inspect(system);
   run.classification = recorder.classify(run.result);
   run.observed_frames = order.frames;
   run.streamed_static = std::move(order.streamed_static);
+  run.keyframes_left = order.keyframes_left;
+  run.left_static = std::move(order.left_static);
+  run.left_not_static = std::move(order.left_not_static);
   return run;
 }
 
@@ -284,6 +301,30 @@ FaultCheck checkFault(const SceneRun& run, TimeNs shift_after = std::numeric_lim
   std::printf("resets %zu (%s; continued by %s), ATE whole file %.3f m, largest step beyond the truth's %.3f m\n",
               c.resets, c.why.c_str(), c.continued_by.c_str(), c.ate_whole, c.worst_excess_m);
   return c;
+}
+
+TEST(PipelineSystem, LoopClosureKeyframeDatabaseHoldsStaticLandmarksOnly) {
+  // City with heavy traffic: keyframes leave the window seeing candidates and moving points too.
+  std::vector<std::pair<TimeNs, std::uint64_t>> stored;
+  std::size_t database_keyframes = 0;
+  const SceneRun run = runScene(
+      Mode::kIdy, 6.0, RunOptions::twoThreads(), {}, false, {}, [](Config& c) { c.loop.enabled = true; },
+      [&](const System& system) {
+        ASSERT_NE(system.loopCloser(), nullptr);
+        // every keyframe that left the window was taken or skipped as too near the last one
+        database_keyframes = system.loopCloser()->database().size() + system.loopCloser()->stats().keyframes_skipped;
+        for (const auto& kf : system.loopCloser()->database().keyframes())
+          for (const auto& l : kf.landmarks) stored.emplace_back(kf.t_ns, l.id);
+      });
+  EXPECT_EQ(database_keyframes, run.keyframes_left);
+  EXPECT_GT(run.left_not_static.size(), 0u) << "the test needs keyframes that saw non-static landmarks";
+  EXPECT_GT(stored.size(), 100u);
+  for (const auto& s : stored) {
+    EXPECT_EQ(run.left_not_static.count(s), 0u) << "landmark " << s.second << " at " << s.first;
+    EXPECT_EQ(run.left_static.count(s), 1u) << "landmark " << s.second << " at " << s.first;
+  }
+  EXPECT_TRUE(run.result.loop_enabled);
+  EXPECT_EQ(run.result.loop_trajectory.size(), run.result.trajectory.size());
 }
 
 TEST(Faults, TheFaultTimeIsInsideTheSequence) {

@@ -9,6 +9,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <unordered_map>
+#include <utility>
 
 #include "backend/gauge.h"
 #include "backend/imu_factor.h"
@@ -184,13 +185,11 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     r.status = "skipped: time stamp not after the previous frame";
     return r;
   }
-  if (count_ >= 0) {
-    // A gap the integration cannot bridge ends the segment: this frame starts a new window.
-    if (const std::string why = bridgeProblem(ff.t_ns); !why.empty()) {
-      r.reset = initialized_;
-      r.reset_why = why;
-      if (initialized_) resetAfterFailure(); else resetWindow();
-    }
+  // A gap the integration cannot bridge ends the segment: this frame starts a new window.
+  if (const std::string why = count_ >= 0 ? bridgeProblem(ff.t_ns) : std::string(); !why.empty()) {
+    r.reset = initialized_;
+    r.reset_why = why;
+    if (initialized_) resetAfterFailure(); else resetWindow();
   }
   const int n = count_ + 1;
   Frame& f = frames_[n];
@@ -232,6 +231,7 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
   last_good_t_ns_ = ff.t_ns;
   const auto slide_start = std::chrono::steady_clock::now();
   slide(r.keyframe);
+  r.left_window = std::exchange(leaving_, std::nullopt);
   r.marginalization_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - slide_start).count();
   return r;
@@ -576,6 +576,26 @@ Vector3d Estimator::landmarkWorld(const Landmark& lm) const {
   return cameraPose(frames_[lm.start_frame].T_w_b(), rig_.T_b_c0) * p_c;
 }
 
+LeavingKeyframe Estimator::leavingKeyframe() const {
+  LeavingKeyframe k;
+  const Isometry3d T = frames_[0].T_w_b();
+  k.t_ns = frames_[0].t_ns;
+  k.p_w_b = T.translation();
+  k.q_w_b = Quaterniond(T.linear()).normalized();
+  for (const auto& [id, lm] : fm_.landmarks()) {
+    if (lm.start_frame != 0) continue;  // frame 0 is the oldest: its landmarks start there
+    KeyframeObservation o;
+    o.id = id;
+    o.label = lm.label;
+    o.has_position = lm.usable();
+    if (o.has_position) o.p_w = landmarkWorld(lm);
+    o.uv = lm.obs.front().uv;
+    o.xy = lm.obs.front().xy;
+    k.observations.push_back(o);
+  }
+  return k;
+}
+
 void Estimator::addToStaticMap(const Landmark& lm) {
   if (!initialized_ || !lm.usable() || lm.label != FeatureLabel::kStatic || lm.obs.size() < 3) return;
   if (!mapped_.insert(lm.id).second) return;
@@ -708,6 +728,7 @@ void Estimator::marginalizeOldest() {
     prior_ = std::make_shared<MarginalizationPrior>(m.marginalize());
     if (prior_->blocks.empty()) prior_.reset();
   }
+  if (initialized_) leaving_ = leavingKeyframe();
   for (const auto& [id, lm] : fm_.landmarks())
     if (lm.start_frame == 0 && lm.endFrame() < count_) addToStaticMap(lm);  // leaves the window
   const Isometry3d T0 = frames_[0].T_w_b(), T1 = frames_[1].T_w_b();

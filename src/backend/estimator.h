@@ -41,6 +41,24 @@ struct MapPoint {
   std::uint64_t id = 0;
 };
 
+/// A landmark as the keyframe leaving the window saw it (loop closure's keyframe database).
+struct KeyframeObservation {
+  std::uint64_t id = 0;
+  FeatureLabel label = FeatureLabel::kStatic;
+  bool has_position = false;                       ///< triangulated: p_w valid
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();   ///< world position
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();    ///< left pixel in this keyframe
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();    ///< left normalized in this keyframe
+};
+
+/// The oldest keyframe of the window when it leaves (marginalized), with its final estimate.
+struct LeavingKeyframe {
+  TimeNs t_ns = 0;  ///< IMU clock, as the frame was added
+  Eigen::Vector3d p_w_b = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q_w_b = Eigen::Quaterniond::Identity();
+  std::vector<KeyframeObservation> observations;  ///< every landmark it observed, any label
+};
+
 /// Where one window solve spent its time (ms, wall clock) and how it ended (DESIGN §4.10:
 /// offline solves stop on iterations and convergence, never on the clock).
 struct SolveProfile {
@@ -96,6 +114,8 @@ struct FrameResult {
   /// stop) held ("held"); empty otherwise.
   std::string reanchored;
   int skipped_blocks = 0;  ///< residual blocks left out of this solve: not finite at their start values
+  /// The keyframe that left the window at this frame (initialized windows only).
+  std::optional<LeavingKeyframe> left_window;
 };
 
 /// The newest state, for the front end's motion prior (DESIGN §2: one small struct).
@@ -171,6 +191,7 @@ class Estimator {
   /// observations, or into its newest `last_n` ones only (0: all).
   double meanReprojectionErrorPx(const Landmark& lm, int last_n = 0) const;
   Eigen::Vector3d landmarkWorld(const Landmark& lm) const;
+  LeavingKeyframe leavingKeyframe() const;  ///< frame 0 and its landmarks, before it leaves
   void addToStaticMap(const Landmark& lm);
   bool failureDetected(std::string& why) const;
   /// Why frame `t1` cannot be integrated to from the window's newest frame (a frame or IMU gap
@@ -206,6 +227,7 @@ class Estimator {
   /// The last good state (after the newest successful frame) and whether the next
   /// initialization must continue from it (a reset happened since).
   std::optional<imu::NavState> last_good_;
+  std::optional<LeavingKeyframe> leaving_;  ///< set by marginalizeOldest, moved into the frame's result
   TimeNs last_good_t_ns_ = 0;
   bool reanchor_pending_ = false;
 };

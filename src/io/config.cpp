@@ -355,6 +355,7 @@ void declareAll(ParamVisitor& v, Config& c, std::string& mode_name) {
   c.tracker.declareParams(v);
   c.estimator.declareParams(v);
   c.idy.declareParams(v);
+  c.loop.declareParams(v);
   declareTopicParams(v, c);
 }
 

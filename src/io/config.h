@@ -11,6 +11,7 @@
 #include "backend/estimator_options.h"
 #include "camera/camera_params.h"
 #include "camera/rig.h"
+#include "map/loop_options.h"
 #include "core/measurements.h"
 #include "dynamic/idy_options.h"
 #include "frontend/tracker_params.h"
@@ -46,6 +47,7 @@ struct Config {
   frontend::TrackerParams tracker;   ///< feature tracker keys
   backend::EstimatorOptions estimator;  ///< solver, time offset and measurement-model keys
   dynamic::IdyOptions idy;           ///< the paper's method and the dynamic-scene tests
+  map::LoopOptions loop;             ///< loop closure (off unless loop_closure: 1)
   /// Bag topics (VINS-Fusion's keys imu_topic, image0_topic, image1_topic; idyvins'
   /// groundtruth_topic, empty = none). Used when the dataset is a ROS1 bag.
   std::string imu_topic = "/imu0", image0_topic = "/cam0/image_raw", image1_topic = "/cam1/image_raw";

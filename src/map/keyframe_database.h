@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/time.h"
+#include "map/loop_options.h"
 
 namespace faiss {
 struct IndexBinaryHNSW;
@@ -40,14 +41,6 @@ struct Keyframe {
   Eigen::Quaterniond q_w_b = Eigen::Quaterniond::Identity();
   std::vector<Descriptor> descriptors;  ///< recognition corners (the landmarks' and extra ones)
   std::vector<KeyframeLandmark> landmarks;
-};
-
-struct PlaceRecognitionOptions {
-  int neighbours = 4;        ///< nearest descriptors looked up per query descriptor
-  int max_hamming = 40;      ///< a neighbour farther than this (bits of 256) does not vote
-  int min_votes = 15;        ///< a keyframe with fewer votes is no candidate
-  std::size_t max_candidates = 3;
-  int hnsw_links = 16, hnsw_ef_search = 32;  ///< faiss HNSW graph degree and search breadth
 };
 
 struct PlaceCandidate {

@@ -8,7 +8,8 @@
 
 namespace idyvins::map {
 
-std::vector<Descriptor> describeCorners(const cv::Mat& gray, std::vector<cv::Point2f>& corners) {
+std::vector<Descriptor> describeCorners(const cv::Mat& gray, std::vector<cv::Point2f>& corners,
+                                        std::vector<int>* kept_index) {
   std::vector<cv::KeyPoint> keypoints;
   for (std::size_t i = 0; i < corners.size(); ++i)
     keypoints.emplace_back(corners[i], 31.f, -1.f, 0.f, 0, static_cast<int>(i));
@@ -22,12 +23,16 @@ std::vector<Descriptor> describeCorners(const cv::Mat& gray, std::vector<cv::Poi
     kept[i] = corners[static_cast<std::size_t>(keypoints[i].class_id)];
   }
   corners = std::move(kept);
+  if (kept_index) {
+    kept_index->clear();
+    for (const auto& k : keypoints) kept_index->push_back(k.class_id);
+  }
   return out;
 }
 
 std::vector<cv::Point2f> recognitionCorners(const cv::Mat& gray, int count) {
   std::vector<cv::KeyPoint> keypoints;
-  cv::ORB::create(count)->detect(gray, keypoints);
+  cv::ORB::create(count, 1.2f, /*nlevels=*/1)->detect(gray, keypoints);  // one scale: revisits are seen at similar distances
   std::vector<cv::Point2f> out;
   for (const auto& k : keypoints) out.push_back(k.pt);
   return out;

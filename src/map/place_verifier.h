@@ -10,28 +10,22 @@
 #include <vector>
 
 #include "map/keyframe_database.h"
+#include "map/loop_options.h"
 
 namespace idyvins::map {
 
 /// ORB (oriented rBRIEF) descriptors at `corners` (left-image pixels). Corners too close to
-/// the border for a descriptor are removed from `corners`; the rest keep their order.
-std::vector<Descriptor> describeCorners(const cv::Mat& gray, std::vector<cv::Point2f>& corners);
-/// Up to `count` FAST corners spread over the image (ORB's detector), for recognition.
+/// the border for a descriptor are removed from `corners`; the rest keep their order, and
+/// `kept` (when given) receives the index each had in the input.
+std::vector<Descriptor> describeCorners(const cv::Mat& gray, std::vector<cv::Point2f>& corners,
+                                        std::vector<int>* kept = nullptr);
+/// Up to `count` FAST corners with the best Harris scores (ORB's detector, one scale), for recognition.
 std::vector<cv::Point2f> recognitionCorners(const cv::Mat& gray, int count);
 
 /// The current keyframe as a query: its corners (normalized undistorted left camera) and descriptors.
 struct PlaceQuery {
   std::vector<Eigen::Vector2d> xy;
   std::vector<Descriptor> descriptors;
-};
-
-struct VerifyOptions {
-  int max_hamming = 50;        ///< a match is at most this far (bits)
-  double ratio = 0.8;          ///< and clearly nearer than the second nearest landmark
-  int min_inliers = 25;        ///< PnP inliers needed for a loop
-  double reprojection_px = 3;  ///< RANSAC inlier threshold
-  double focal_px = 460;       ///< to turn it into normalized units
-  int iterations = 200;
 };
 
 struct PlaceVerification {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/time.h"
+#include "map/loop_options.h"
 
 namespace idyvins::map {
 
@@ -42,16 +43,6 @@ class FourDofEdgeCost final : public ceres::SizedCostFunction<4, 3, 1, 3, 1> {
   RelativePose4 measured_;
   Eigen::Matrix3d tilt_i_;
   double w_t_, w_yaw_;
-};
-
-struct PoseGraphOptions {
-  int odometry_neighbours = 4;   ///< odometry edges from each keyframe to this many predecessors (VINS-Fusion: 4)
-  double odometry_sigma_t = 0.1;     ///< m
-  double odometry_sigma_yaw = 0.01;  ///< rad
-  double loop_sigma_t = 0.1;         ///< m
-  double loop_sigma_yaw = 0.01;      ///< rad
-  double loop_huber = 1.0;           ///< Huber threshold of loop edges, in sigmas
-  int max_iterations = 50;
 };
 
 /// One keyframe in the graph: its odometry pose and its corrected pose.

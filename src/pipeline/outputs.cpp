@@ -1,5 +1,7 @@
 #include "pipeline/outputs.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -71,6 +73,34 @@ std::vector<std::vector<StampedPose>> segments(const Result& r) {
 
 }  // namespace
 
+void writeLoopsCsv(const std::string& path, const std::vector<map::LoopEvent>& loops) {
+  std::ofstream f(path);
+  f << "# old_t_ns,new_t_ns,old_keyframe,new_keyframe,votes,matches,inliers,dx,dy,dz,dyaw_rad"
+       " (new keyframe in the old one's body frame, 4-DoF)\n";
+  char line[256];
+  for (const auto& l : loops) {
+    std::snprintf(line, sizeof(line), "%lld,%lld,%u,%u,%d,%d,%d,%.6f,%.6f,%.6f,%.6f\n",
+                  static_cast<long long>(l.old_t_ns), static_cast<long long>(l.new_t_ns), l.old_keyframe, l.new_keyframe,
+                  l.votes, l.matches, l.inliers, l.relative.t_from_to.x(), l.relative.t_from_to.y(),
+                  l.relative.t_from_to.z(), l.relative.dyaw);
+    f << line;
+  }
+  if (!f) throw InputError(path, "write failed");
+}
+
+nlohmann::json loopJson(const Result& r) {
+  const map::LoopStats& st = r.loop_stats;
+  const double k = std::max<double>(1.0, static_cast<double>(st.keyframes));
+  return {{"keyframes", st.keyframes},
+          {"keyframes_skipped", st.keyframes_skipped},
+          {"loops", st.loops},
+          {"candidates_checked", st.candidates_checked},
+          {"refused_by_consistency", st.refused_by_consistency},
+          {"mean_detect_ms_per_keyframe", st.sum_detect_ms / k},
+          {"graph_solves", st.graph_solves},
+          {"mean_graph_ms_per_solve", st.graph_solves ? st.sum_graph_ms / static_cast<double>(st.graph_solves) : 0.0}};
+}
+
 void writeResultFiles(const std::string& out, const Result& r) {
   // Each file is written under a temporary name and renamed when complete: a run stopped
   // while writing never leaves a cut file under a final name.
@@ -94,6 +124,9 @@ void writeResultFiles(const std::string& out, const Result& r) {
   atomically("trajectory.csv", [&](const std::string& p) { io::writeEurocCsv(p, poses); });
   atomically("state.csv", [&](const std::string& p) { io::writeStateCsv(p, states); });
   atomically("resets.csv", [&](const std::string& p) { writeResetsCsv(p, r.summary.resets); });
+  if (!r.loop_enabled) return;
+  atomically("trajectory_loop.tum", [&](const std::string& p) { io::writeTum(p, r.loop_trajectory); });
+  atomically("loops.csv", [&](const std::string& p) { writeLoopsCsv(p, r.loops); });
 }
 
 nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
@@ -129,7 +162,8 @@ nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
           {"map_static_points", r.static_map.size()},
           {"map_dynamic_points", r.dynamic_map.size()},
           {"classification", nullptr},
-          {"resets", resets}};
+          {"resets", resets},
+          {"loop_closure", r.loop_enabled ? loopJson(r) : nlohmann::json()}};
 }
 
 void addAte(nlohmann::json& summary, const std::vector<StampedPose>& gt, const Result& r) {
@@ -144,6 +178,13 @@ void addAte(nlohmann::json& summary, const std::vector<StampedPose>& gt, const R
     summary["path_length_m"] = eval::pathLength(gt_pairs);
   } catch (const std::exception&) {  // no overlap with the ground truth: no ATE
     return;
+  }
+  if (r.loop_enabled && r.loop_trajectory.size() > 2) {
+    try {
+      summary["loop_closure"]["ate_rmse_m"] =
+          eval::computeAte(gt, r.loop_trajectory, eval::AlignMode::kSe3, 10'000'000).stats.rmse;
+    } catch (const std::exception&) {
+    }
   }
   if (r.summary.resets.empty()) return;
   // With resets, the ATE of each segment on its own too (each aligned separately).

@@ -102,6 +102,9 @@ System::System(const Config& config, const RunOptions& run)
     throw std::invalid_argument("a pipelined run needs RunOptions::feedback_delay 1");
   if (run_.pipelined) worker_ = std::make_unique<Worker>();
   td_s_ = config_.estimator.td_s;
+  if (config_.loop.enabled)
+    loop_ = std::make_unique<map::LoopCloser>(config_.loop, camera::makeCamera(config_.cams.at(0)), config_.T_b_c.at(0),
+                                              /*threaded=*/true);
 }
 
 System::~System() = default;
@@ -228,7 +231,39 @@ void System::finalize(InFlight& f) {
     imu_to_estimator_ -= drop;
   }
   account(f.out);
+  if (loop_) feedLoopCloser(f);
   for (FrameObserver* o : observers_) o->onFrame(f.input, f.out);
+}
+
+void System::feedLoopCloser(const InFlight& f) {
+  constexpr std::size_t kMaxImages = 400;  // frames in the window span far fewer; bounds a long failure
+  window_images_.emplace_back(f.out.features.t_ns, f.input.left);
+  if (window_images_.size() > kMaxImages) window_images_.pop_front();
+  const auto& kf = f.out.estimate.left_window;
+  if (!kf) return;
+  while (!window_images_.empty() && window_images_.front().first < kf->t_ns) window_images_.pop_front();
+  if (window_images_.empty() || window_images_.front().first != kf->t_ns) return;  // not seen (cannot happen)
+  map::LoopKeyframe k;
+  k.t_ns = kf->t_ns;
+  k.p_w_b = kf->p_w_b;
+  k.q_w_b = kf->q_w_b;
+  k.left = window_images_.front().second;
+  for (const backend::KeyframeObservation& o : kf->observations)  // static landmarks only (DESIGN §7)
+    if (o.label == FeatureLabel::kStatic && o.has_position) k.landmarks.push_back({o.id, o.p_w, o.uv, o.xy});
+  loop_->add(std::move(k));
+}
+
+void System::finishLoops(Result& result) {
+  result.loop_enabled = loop_ != nullptr;
+  if (!loop_) return;
+  loop_->finish();
+  for (const StampedState& s : trajectory_) {
+    StampedPose p{s.t_ns, s.state.p_w_b, s.state.q_w_b};
+    loop_->corrected(s.t_ns, s.state.p_w_b, s.state.q_w_b, p.p_w_b, p.q_w_b);
+    result.loop_trajectory.push_back(p);
+  }
+  result.loops = loop_->loops();
+  result.loop_stats = loop_->stats();
 }
 
 void System::mapLostMoving(const frontend::FeatureFrame& ff, FrameOutput& out) {
@@ -305,6 +340,7 @@ Result System::finish() {
   result.dynamic_map.insert(result.dynamic_map.end(), confirmed_.begin(), confirmed_.end());
   result.trajectory = trajectory_;
   result.summary = summary_;
+  finishLoops(result);
   return result;
 }
 

@@ -23,6 +23,7 @@
 #include "dynamic/dynamic.h"
 #include "frontend/feature_frame.h"
 #include "io/config.h"
+#include "map/loop_closer.h"
 #include "pipeline/front_end.h"
 
 namespace idyvins::pipeline {
@@ -98,6 +99,12 @@ struct Result {
   std::vector<backend::MapPoint> dynamic_map;
   std::vector<StampedState> trajectory;  ///< every initialized frame
   Summary summary;
+  /// Loop closure (config loop_closure: 1): every initialized frame's pose corrected by the
+  /// final pose graph, the loops closed, and what it cost.
+  bool loop_enabled = false;
+  std::vector<StampedPose> loop_trajectory;
+  std::vector<map::LoopEvent> loops;
+  map::LoopStats loop_stats;
 };
 
 /// How System runs the two halves of a frame (DESIGN §4.10). The data flow is fixed, so
@@ -160,6 +167,8 @@ class System {
   int threads() const { return run_.pipelined ? 2 : 1; }
   const Config& config() const { return config_; }
   const Summary& summary() const { return summary_; }
+  /// The loop closer (null unless the config's loop_closure); read it after finish().
+  const map::LoopCloser* loopCloser() const { return loop_.get(); }
 
  private:
   class Worker;
@@ -179,6 +188,8 @@ class System {
   void mapLostMoving(const frontend::FeatureFrame& ff, FrameOutput& out);
   void mapEliminated(const frontend::FeatureFrame& ff, FrameOutput& out);
   void account(FrameOutput& out);
+  void feedLoopCloser(const InFlight& f);  ///< the keyframe that left the window, with its image
+  void finishLoops(Result& result);
 
   Config config_;
   Mode mode_;
@@ -202,6 +213,9 @@ class System {
   /// Left and right camera poses of the previous frame (when it was initialized): the
   /// lost-corner test's points are triangulated in the frame they were seen in.
   std::optional<std::pair<Eigen::Isometry3d, Eigen::Isometry3d>> prev_T_w_c_;
+  std::unique_ptr<map::LoopCloser> loop_;  ///< config loop_closure: its own thread
+  /// Left images of the frames that may still leave the window as keyframes (time on the IMU clock).
+  std::deque<std::pair<TimeNs, cv::Mat>> window_images_;
 };
 
 /// Pose of a stamped state (for trajectory writers and ATE).

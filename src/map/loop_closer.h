@@ -1,0 +1,103 @@
+#pragma once
+// Loop closure (DESIGN §7): keyframes that left the odometry window go into the keyframe
+// database; each new one is looked up among the older ones (appearance), checked by PnP
+// on the candidate's static landmarks (geometry) and, when it holds, joined to it by a
+// loop edge in the 4-DoF pose graph, which is then solved. Runs on its own thread (or on
+// the caller's); keyframes are handled in the order given, so every result is the same
+// whatever the thread timing (the corrected trajectory is read after finish()).
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <condition_variable>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <thread>
+#include <vector>
+
+#include "camera/camera_model.h"
+#include "core/time.h"
+#include "map/keyframe_database.h"
+#include "map/place_verifier.h"
+#include "map/pose_graph.h"
+
+namespace idyvins::map {
+
+/// A static landmark observed by the keyframe (the caller passes static ones only).
+struct LoopLandmark {
+  std::uint64_t id = 0;
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero(), xy = Eigen::Vector2d::Zero();
+};
+
+/// One keyframe handed to the loop closer.
+struct LoopKeyframe {
+  TimeNs t_ns = 0;
+  Eigen::Vector3d p_w_b = Eigen::Vector3d::Zero();   ///< odometry pose
+  Eigen::Quaterniond q_w_b = Eigen::Quaterniond::Identity();
+  cv::Mat left;  ///< the left image (gray)
+  std::vector<LoopLandmark> landmarks;
+};
+
+/// A loop that was closed.
+struct LoopEvent {
+  std::uint32_t old_keyframe = 0, new_keyframe = 0;
+  TimeNs old_t_ns = 0, new_t_ns = 0;
+  int votes = 0, matches = 0, inliers = 0;
+  RelativePose4 relative;  ///< new keyframe in the old one's frame (from PnP)
+};
+
+struct LoopStats {
+  std::size_t keyframes = 0, keyframes_skipped = 0, candidates_checked = 0, loops = 0, refused_by_consistency = 0;
+  double sum_detect_ms = 0;  ///< descriptors, lookup, geometric check
+  double sum_graph_ms = 0;   ///< pose-graph solves
+  std::size_t graph_solves = 0;
+};
+
+class LoopCloser {
+ public:
+  /// `left_camera` lifts the extra corners; T_b_c the left camera in the body. threaded: a worker thread.
+  LoopCloser(const LoopOptions& options, std::unique_ptr<camera::CameraModel> left_camera,
+             const Eigen::Isometry3d& T_b_c, bool threaded);
+  ~LoopCloser();
+  LoopCloser(const LoopCloser&) = delete;
+  LoopCloser& operator=(const LoopCloser&) = delete;
+
+  /// Takes a keyframe (skipped when it is too near the last one taken: LoopOptions).
+  void add(LoopKeyframe keyframe);
+  /// Waits until every keyframe given has been handled (call before reading results).
+  void finish();
+
+  const std::vector<LoopEvent>& loops() const { return loops_; }
+  const PoseGraph& graph() const { return graph_; }
+  const KeyframeDatabase& database() const { return database_; }
+  const LoopStats& stats() const { return stats_; }
+  /// The odometry pose at t_ns moved by the correction of the newest keyframe at or before
+  /// it (the first keyframe's for earlier times; unchanged without keyframes).
+  void corrected(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom,
+                 Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const;
+
+ private:
+  void run();
+  void handle(LoopKeyframe& keyframe);
+  bool tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint32_t new_id);
+
+  LoopOptions options_;
+  std::unique_ptr<camera::CameraModel> camera_;
+  Eigen::Isometry3d T_b_c_;
+  KeyframeDatabase database_;
+  PoseGraph graph_;
+  std::vector<LoopEvent> loops_;
+  LoopStats stats_;
+  bool have_last_ = false;  ///< the last keyframe taken (add(), caller's thread)
+  Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond last_q_ = Eigen::Quaterniond::Identity();
+  std::mutex mutex_;
+  std::condition_variable wake_, idle_;
+  std::deque<LoopKeyframe> queue_;
+  bool busy_ = false, stopping_ = false;
+  std::thread worker_;
+};
+
+}  // namespace idyvins::map

@@ -1,0 +1,69 @@
+#pragma once
+// Loop closure's parameters: the single place their defaults live, with their config keys
+// (core/params.h). Header-only, so the config reader needs no loop-closure library.
+
+#include <cstddef>
+
+#include "core/params.h"
+
+namespace idyvins::map {
+
+struct PlaceRecognitionOptions {
+  int neighbours = 4;        ///< nearest descriptors looked up per query descriptor
+  int max_hamming = 40;      ///< a neighbour farther than this (bits of 256) does not vote
+  int min_votes = 15;        ///< a keyframe with fewer votes is no candidate
+  std::size_t max_candidates = 3;
+  int hnsw_links = 16, hnsw_ef_search = 32;  ///< faiss HNSW graph degree and search breadth
+};
+
+struct VerifyOptions {
+  int max_hamming = 50;        ///< a match is at most this far (bits)
+  double ratio = 0.8;          ///< and clearly nearer than the second nearest landmark
+  int min_inliers = 25;        ///< PnP inliers needed for a loop
+  double reprojection_px = 3;  ///< RANSAC inlier threshold
+  double focal_px = 460;       ///< to turn it into normalized units
+  int iterations = 200;
+};
+
+struct PoseGraphOptions {
+  int odometry_neighbours = 4;   ///< odometry edges from each keyframe to this many predecessors (VINS-Fusion: 4)
+  double odometry_sigma_t = 0.1;     ///< m
+  double odometry_sigma_yaw = 0.01;  ///< rad
+  double loop_sigma_t = 0.1;         ///< m
+  double loop_sigma_yaw = 0.01;      ///< rad
+  double loop_huber = 1.0;           ///< Huber threshold of loop edges, in sigmas
+  int max_iterations = 50;
+};
+
+struct LoopOptions {
+  bool enabled = false;          ///< the config's loop_closure
+  double min_age_s = 20.0;       ///< a keyframe is matched only against keyframes at least this much older
+  int extra_corners = 150;       ///< recognition corners detected beside the landmarks' own
+  /// A keyframe nearer than this to the last one the loop closer took (and turned less than
+  /// min_keyframe_turn_rad) is skipped: the database grows with the places seen, not with time.
+  double min_keyframe_distance_m = 0.3;
+  double min_keyframe_turn_rad = 0.17;
+  double max_loop_distance_m = 20.0;  ///< a loop's translation from the odometry guess beyond this is refused
+  double max_loop_yaw_rad = 0.5;      ///< likewise its yaw
+  double max_tilt_rad = 0.1;          ///< PnP's roll/pitch disagreeing with the odometry's by more: refused
+  PlaceRecognitionOptions recognition;
+  VerifyOptions verify;
+  PoseGraphOptions graph;
+
+  /// Declares the config keys (core/params.h); the rest keep their defaults.
+  void declareParams(ParamVisitor& v) {
+    v.section("Loop closure (DESIGN §7)");
+    v.param({"loop_closure", "0/1, close loops: trajectory_loop.tum, loops.csv (VINS-Mono's key)"}, enabled);
+    v.param({"loop_min_age", "s, a keyframe is matched against keyframes at least this much older",
+             ParamRule::kPositive},
+            min_age_s);
+    v.param({"loop_min_inliers", "PnP inliers that make a loop", ParamRule::kPositive}, verify.min_inliers);
+    v.param({"loop_extra_corners", "recognition corners per keyframe beside the landmarks'", ParamRule::kNonNegative},
+            extra_corners);
+    v.param({"loop_keyframe_distance", "m, keyframes nearer than this to the last one taken are skipped (unless turned)",
+             ParamRule::kNonNegative},
+            min_keyframe_distance_m);
+  }
+};
+
+}  // namespace idyvins::map
