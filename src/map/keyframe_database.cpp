@@ -1,6 +1,6 @@
 #include "map/keyframe_database.h"
 
-#include <faiss/IndexBinaryHNSW.h>
+#include <faiss/IndexBinaryHash.h>
 #include <omp.h>
 
 #include <algorithm>
@@ -12,9 +12,9 @@
 namespace idyvins::map {
 
 namespace {
-/// faiss inserts into its HNSW graph from several OpenMP threads, and the graph then depends
-/// on their timing: one thread, for the calling thread only (OpenMP's nthreads is per thread),
-/// keeps place recognition deterministic. Restored when done.
+/// faiss spreads a lookup's queries over OpenMP threads: one thread, for the calling thread only
+/// (OpenMP's nthreads is per thread), leaves the other core to the odometry and keeps every
+/// result independent of thread timing. Restored when done.
 class OneOpenMpThread {
  public:
   OneOpenMpThread() : before_(omp_get_max_threads()) { omp_set_num_threads(1); }
@@ -39,8 +39,8 @@ int hamming(const Descriptor& a, const Descriptor& b) {
 }
 
 KeyframeDatabase::KeyframeDatabase(const PlaceRecognitionOptions& options)
-    : options_(options), index_(std::make_unique<faiss::IndexBinaryHNSW>(256, options.hnsw_links)) {
-  index_->hnsw.efSearch = options.hnsw_ef_search;
+    : options_(options), index_(std::make_unique<faiss::IndexBinaryHash>(256, options.hash_bits)) {
+  index_->nflip = options.hash_flips;
 }
 KeyframeDatabase::~KeyframeDatabase() = default;
 KeyframeDatabase::KeyframeDatabase(KeyframeDatabase&&) noexcept = default;

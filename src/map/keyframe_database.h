@@ -3,7 +3,7 @@
 // the pose, binary descriptors of corners for recognition, and the static landmarks seen
 // (3D, with the corner they were seen at). Only static landmarks enter (DESIGN §7): the
 // caller hands over features whose label is static; eliminated and confirmed-dynamic ones
-// never reach this module. Place recognition: every descriptor in one faiss binary HNSW
+// never reach this module. Place recognition: every descriptor in one faiss binary hash
 // index; a query's descriptors vote for the keyframes of their near neighbours.
 
 #include <Eigen/Core>
@@ -17,7 +17,7 @@
 #include "map/loop_options.h"
 
 namespace faiss {
-struct IndexBinaryHNSW;
+struct IndexBinaryHash;
 }
 
 namespace idyvins::map {
@@ -70,7 +70,7 @@ class KeyframeDatabase {
   PlaceRecognitionOptions options_;
   std::vector<Keyframe> keyframes_;
   std::vector<std::uint32_t> owner_;  ///< keyframe of each indexed descriptor
-  std::unique_ptr<faiss::IndexBinaryHNSW> index_;
+  std::unique_ptr<faiss::IndexBinaryHash> index_;
 };
 
 }  // namespace idyvins::map

@@ -13,7 +13,9 @@ struct PlaceRecognitionOptions {
   int max_hamming = 40;      ///< a neighbour farther than this (bits of 256) does not vote
   int min_votes = 15;        ///< a keyframe with fewer votes is no candidate
   std::size_t max_candidates = 3;
-  int hnsw_links = 16, hnsw_ef_search = 32;  ///< faiss HNSW graph degree and search breadth
+  /// faiss IndexBinaryHash: descriptors bucketed by their first hash_bits bits; a lookup visits
+  /// the buckets within hash_flips bit flips of the query's.
+  int hash_bits = 16, hash_flips = 1;
 };
 
 struct VerifyOptions {
