@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Loop closure end to end: a rendered garage lap and a bit (parking_lot, no traffic, 37 s; the
-lap takes 33 s) run with loop_closure 1. At least one loop, no false loop (a loop edge whose
+lap takes 33 s) run with loop_closure 1 and --save-map. At least one loop, no false loop (a loop edge whose
 relative pose disagrees with the ground truth by more than 0.3 m or 3 deg), trajectory_loop.tum
-with a pose per odometry pose, loops.csv and stats.json agreeing. Debian's python3 with numpy.
+with a pose per odometry pose, loops.csv, stats.json and the saved map agreeing. Debian's python3 with numpy.
 
 Usage: loop_check.py IDYVINS_BINARY WORK_DIR [--keep]"""
 import bisect
@@ -67,7 +67,8 @@ def main(idy, work):
     text = open(cfg).read()
     check("loop_closure: 0" in text, "the simulator's config has loop_closure off by default")
     open(cfg, "w").write(text.replace("loop_closure: 0", "loop_closure: 1"))
-    r = subprocess.run([idy, "run", "-c", cfg, "-d", seq, "-o", out], capture_output=True, text=True)
+    saved = os.path.join(work, "map")
+    r = subprocess.run([idy, "run", "-c", cfg, "-d", seq, "-o", out, "--save-map", saved], capture_output=True, text=True)
     check(r.returncode == 0, "run completes (%s)" % r.stderr.strip()[-200:])
     s = json.load(open(os.path.join(out, "stats.json")))["summary"]
     loop = s["loop_closure"]
@@ -82,6 +83,11 @@ def main(idy, work):
     check(len(odo) == len(cor) and len(odo) > 600, "trajectory_loop.tum: a pose per odometry pose (%d, %d)"
           % (len(cor), len(odo)))
     check("ate_rmse_m" in loop, "ATE of the loop trajectory in stats.json")
+    header = json.load(open(os.path.join(saved, "map.json")))
+    check(header["format"] == "idyvins-map" and header["keyframes"] == loop["keyframes"]
+          and header["loops"] == loop["loops"] and os.path.getsize(os.path.join(saved, "keyframes.bin")) > 1000,
+          "--save-map wrote the database and the pose graph (%d keyframes, %d loops)" % (header["keyframes"],
+                                                                                        header["loops"]))
     print("odometry ATE %.4f m, with loops %.4f m; detection %.1f ms per keyframe, pose graph %.1f ms per solve"
           % (s["ate_rmse_m"], loop.get("ate_rmse_m", float("nan")), loop["mean_detect_ms_per_keyframe"],
              loop["mean_graph_ms_per_solve"]))

@@ -27,7 +27,7 @@ namespace idyvins::app {
 namespace {
 
 struct RunArgs {
-  std::string config, dataset, out, mode, dump_observations, groundtruth_topic;
+  std::string config, dataset, out, mode, dump_observations, groundtruth_topic, save_map;
   std::size_t max_frames = 0;
   bool solver_time_limit = false;
   int threads = 2, feedback_delay = -1;
@@ -177,6 +177,7 @@ pipeline::System makeSystem(const RunArgs& a, Config& config) {
   if (!a.mode.empty() && !parseMode(a.mode, config.mode))
     throw CLI::ValidationError("--mode", "expected " + modeNames() + ", got '" + a.mode + "'");
   if (a.solver_time_limit) config.estimator.time_limited = true;
+  if (!a.save_map.empty()) config.loop.enabled = true;  // the map is the loop closer's database
   pipeline::RunOptions run;
   run.pipelined = a.threads == 2;
   run.feedback_delay = a.feedback_delay >= 0 ? a.feedback_delay : (run.pipelined ? 1 : 0);
@@ -234,6 +235,7 @@ int runRun(const RunArgs& a) {
   if (in.has_masks) summary["classification"] = pipeline::toJson(observations.classify(result));
   if (!a.dump_observations.empty()) observations.writeCsv(a.dump_observations, result);
   pipeline::writeResultFiles(folder.path(), result);
+  if (!a.save_map.empty()) map::saveMap(a.save_map, system.loopCloser()->savedMap());
   pipeline::addAte(summary, in.groundtruth, result);
   stats.finish(summary);
   folder.publish();
@@ -272,6 +274,9 @@ void registerRun(CLI::App& app, int& exit_code) {
                   "PointStamped), e.g. /odometry (VIODE), /vicon/firefly_sbx/firefly_sbx or /leica/position (EuRoC);\n"
                   "overrides the config's groundtruth_topic");
   cmd->add_option("--mode", a->mode, "overrides the config's mode: " + modeNames());
+  cmd->add_option("--save-map", a->save_map,
+                  "write the keyframe database and pose graph to this folder (map.json, keyframes.bin,\n"
+                  "loops.csv; docs/loop-closure.md); turns loop closure on");
   cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--threads", a->threads,

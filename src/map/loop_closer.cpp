@@ -158,6 +158,14 @@ bool LoopCloser::tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint
   return false;
 }
 
+SavedMap LoopCloser::savedMap() const {
+  SavedMap m;
+  m.keyframes = database_.keyframes();
+  m.nodes = graph_.nodes();
+  m.loops = graph_.loops();
+  return m;
+}
+
 void LoopCloser::corrected(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom,
                            Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const {
   const auto& nodes = graph_.nodes();

@@ -19,6 +19,7 @@
 #include "camera/camera_model.h"
 #include "core/time.h"
 #include "map/keyframe_database.h"
+#include "map/map_io.h"
 #include "map/place_verifier.h"
 #include "map/pose_graph.h"
 
@@ -73,6 +74,8 @@ class LoopCloser {
   const PoseGraph& graph() const { return graph_; }
   const KeyframeDatabase& database() const { return database_; }
   const LoopStats& stats() const { return stats_; }
+  /// The keyframe database and pose graph, as saveMap writes them (after finish()).
+  SavedMap savedMap() const;
   /// The odometry pose at t_ns moved by the correction of the newest keyframe at or before
   /// it (the first keyframe's for earlier times; unchanged without keyframes).
   void corrected(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom,
