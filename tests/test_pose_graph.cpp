@@ -125,7 +125,7 @@ TEST(PoseGraph, LoopEdgesCorrectADriftedTrajectory) {
   // a keyframe after the optimization is moved by the newest node's correction
   Eigen::Vector3d p;
   Eigen::Quaterniond q;
-  graph.correct(l.p_odom.back(), l.q_odom.back(), p, q);
+  graph.correctedAt(graph.nodes().back().t_ns + 1, l.p_odom.back(), l.q_odom.back(), p, q);
   EXPECT_LT((p - corrected.back()).norm(), 1e-9);
 }
 

@@ -15,9 +15,7 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 }
 /// Roll and pitch (the tilt) of two rotations differ by this angle (rad).
 double tiltDifference(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
-  const Eigen::Matrix3d ta = rotZ(yawOf(a)).transpose() * a.toRotationMatrix();
-  const Eigen::Matrix3d tb = rotZ(yawOf(b)).transpose() * b.toRotationMatrix();
-  return Eigen::AngleAxisd(ta.transpose() * tb).angle();
+  return Eigen::AngleAxisd(tiltOf(a).transpose() * tiltOf(b)).angle();
 }
 }  // namespace
 
@@ -166,20 +164,5 @@ SavedMap LoopCloser::savedMap() const {
   return m;
 }
 
-void LoopCloser::corrected(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom,
-                           Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const {
-  const auto& nodes = graph_.nodes();
-  p_w_b = p_odom;
-  q_w_b = q_odom;
-  if (nodes.empty()) return;
-  auto it = std::upper_bound(nodes.begin(), nodes.end(), t_ns,
-                             [](TimeNs t, const PoseGraphNode& n) { return t < n.t_ns; });
-  const PoseGraphNode& n = it == nodes.begin() ? nodes.front() : *std::prev(it);
-  // correction of that keyframe: yaw shift and the translation that maps its odometry position onto the corrected one
-  const double dyaw = wrapAngle(n.yaw - yawOf(n.q_odom));
-  const Eigen::Matrix3d R = rotZ(dyaw);
-  p_w_b = R * (p_odom - n.p_odom) + n.p;
-  q_w_b = Eigen::Quaterniond(R * q_odom.toRotationMatrix()).normalized();
-}
 
 }  // namespace idyvins::map

@@ -76,10 +76,6 @@ class LoopCloser {
   const LoopStats& stats() const { return stats_; }
   /// The keyframe database and pose graph, as saveMap writes them (after finish()).
   SavedMap savedMap() const;
-  /// The odometry pose at t_ns moved by the correction of the newest keyframe at or before
-  /// it (the first keyframe's for earlier times; unchanged without keyframes).
-  void corrected(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom,
-                 Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const;
 
  private:
   void run();

@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/so3.h"
@@ -20,10 +21,17 @@ double wrapAngle(double angle) {
   return a <= -M_PI ? a + 2.0 * M_PI : a;
 }
 
-namespace {
-/// Ry(pitch) Rx(roll) of a rotation: Rz(yaw)^T R.
 Eigen::Matrix3d tiltOf(const Eigen::Quaterniond& q_w_b) {
   return rotZ(yawOf(q_w_b)).transpose() * q_w_b.toRotationMatrix();
+}
+
+namespace {
+/// `p_odom`, `q_odom` moved by node n's correction (its yaw change about n, its position shift).
+void applyCorrection(const PoseGraphNode& n, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom,
+                     Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) {
+  const Eigen::Matrix3d R = rotZ(wrapAngle(n.yaw - yawOf(n.q_odom)));
+  p_w_b = R * (p_odom - n.p_odom) + n.p;
+  q_w_b = Eigen::Quaterniond(R * q_odom.toRotationMatrix()).normalized();
 }
 }  // namespace
 
@@ -79,8 +87,13 @@ std::size_t PoseGraph::addKeyframe(TimeNs t_ns, const Eigen::Vector3d& p_odom, c
   n.t_ns = t_ns;
   n.p_odom = p_odom;
   n.q_odom = q_odom.normalized();
-  n.p = rotZ(drift_yaw_) * p_odom + drift_p_;
-  n.yaw = wrapAngle(yawOf(n.q_odom) + drift_yaw_);
+  n.p = p_odom;
+  n.yaw = yawOf(n.q_odom);
+  if (!nodes_.empty()) {  // the newest node's correction (every node added since the last solve has it too)
+    Eigen::Quaterniond q;
+    applyCorrection(nodes_.back(), p_odom, n.q_odom, n.p, q);
+    n.yaw = yawOf(q);
+  }
   n.fixed = nodes_.empty();
   nodes_.push_back(n);
   return nodes_.size() - 1;
@@ -123,9 +136,6 @@ PoseGraphSolve PoseGraph::optimize() {
   ceres::Solver::Summary summary;
   ceres::Solve(o, &problem, &summary);
   for (PoseGraphNode& n : nodes_) n.yaw = wrapAngle(n.yaw);
-  const PoseGraphNode& last = nodes_.back();
-  drift_yaw_ = wrapAngle(last.yaw - yawOf(last.q_odom));
-  drift_p_ = last.p - rotZ(drift_yaw_) * last.p_odom;
   out.iterations = static_cast<int>(summary.iterations.size());
   out.initial_cost = summary.initial_cost;
   out.final_cost = summary.final_cost;
@@ -139,10 +149,14 @@ void PoseGraph::correctedPose(std::size_t i, Eigen::Vector3d& p_w_b, Eigen::Quat
   q_w_b = Eigen::Quaterniond(rotZ(n.yaw) * tiltOf(n.q_odom)).normalized();
 }
 
-void PoseGraph::correct(const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom, Eigen::Vector3d& p_w_b,
-                        Eigen::Quaterniond& q_w_b) const {
-  p_w_b = rotZ(drift_yaw_) * p_odom + drift_p_;
-  q_w_b = Eigen::Quaterniond(rotZ(drift_yaw_) * q_odom.toRotationMatrix()).normalized();
+void PoseGraph::correctedAt(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom,
+                            Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const {
+  p_w_b = p_odom;
+  q_w_b = q_odom;
+  if (nodes_.empty()) return;
+  const auto it = std::upper_bound(nodes_.begin(), nodes_.end(), t_ns,
+                                   [](TimeNs t, const PoseGraphNode& n) { return t < n.t_ns; });
+  applyCorrection(it == nodes_.begin() ? nodes_.front() : *std::prev(it), p_odom, q_odom, p_w_b, q_w_b);
 }
 
 }  // namespace idyvins::map

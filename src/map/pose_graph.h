@@ -22,6 +22,8 @@ double yawOf(const Eigen::Quaterniond& q_w_b);
 Eigen::Matrix3d rotZ(double yaw);
 /// `angle` wrapped to (-pi, pi].
 double wrapAngle(double angle);
+/// Ry(pitch) Rx(roll) of a body-to-world rotation: Rz(yaw)^T R (what gravity observes).
+Eigen::Matrix3d tiltOf(const Eigen::Quaterniond& q_w_b);
 
 /// A relative pose in 4-DoF: translation of `to` in `from`'s body frame, yaw(to) - yaw(from).
 struct RelativePose4 {
@@ -72,7 +74,7 @@ class PoseGraph {
   explicit PoseGraph(const PoseGraphOptions& options = {});
 
   /// Appends a keyframe with its odometry pose; its corrected pose starts as the odometry
-  /// pose moved by the current drift correction. Returns its index.
+  /// pose moved by the newest node's correction. Returns its index.
   std::size_t addKeyframe(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom);
   void addLoop(const LoopEdge& loop);
   void setFixed(std::size_t node, bool fixed);
@@ -84,17 +86,17 @@ class PoseGraph {
   const std::vector<LoopEdge>& loops() const { return loops_; }
   /// Corrected full pose of node i (its odometry roll and pitch, corrected yaw and position).
   void correctedPose(std::size_t i, Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const;
-  /// The drift correction of the newest node (corrected = Rz(dyaw) * odometry + dp), applied
-  /// to odometry poses newer than the last optimization.
-  void correct(const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom, Eigen::Vector3d& p_w_b,
-               Eigen::Quaterniond& q_w_b) const;
+  /// An odometry pose at t_ns moved by the correction of the newest node at or before t_ns (the
+  /// first node's for earlier times): yaw turned by the node's yaw change, position kept at the
+  /// same offset from the node (unchanged without nodes). Poses newer than the newest node get its
+  /// correction, as new keyframes do.
+  void correctedAt(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom,
+                   Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const;
 
  private:
   PoseGraphOptions options_;
   std::vector<PoseGraphNode> nodes_;
   std::vector<LoopEdge> loops_;
-  double drift_yaw_ = 0;
-  Eigen::Vector3d drift_p_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace idyvins::map

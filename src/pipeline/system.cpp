@@ -259,7 +259,7 @@ void System::finishLoops(Result& result) {
   loop_->finish();
   for (const StampedState& s : trajectory_) {
     StampedPose p{s.t_ns, s.state.p_w_b, s.state.q_w_b};
-    loop_->corrected(s.t_ns, s.state.p_w_b, s.state.q_w_b, p.p_w_b, p.q_w_b);
+    loop_->graph().correctedAt(s.t_ns, s.state.p_w_b, s.state.q_w_b, p.p_w_b, p.q_w_b);
     result.loop_trajectory.push_back(p);
   }
   result.loops = loop_->loops();
