@@ -112,6 +112,93 @@ TEST(SimImu, HandheldImuIntegratesToGroundTruthAndWalks) {
   }
 }
 
+TEST(SimImu, BlockRouteLapsTheCityBlockAndItsImuIntegrates) {
+  const Trajectory traj("city", 2, SimOptions{}.g_norm, TrajectoryStyle::kDrone, /*block=*/true);
+  const NoiselessEnd end = integrateNoiseless("city", traj);
+  EXPECT_LT((end.predicted.p_w_b - end.truth.p_w_b).norm(), 0.01);
+  EXPECT_LT(end.predicted.q_w_b.angularDistance(end.truth.q_w_b), 1e-4);
+  // On the streets around the block x in [60, 130], y in [-40, 0] (within the waves), all four
+  // sides visited, at drone speed and tilt, above the trucks; the same places again a lap later.
+  double vmin = 1e9, vmax = 0, max_tilt = 0, max_off = 0, zmin = 1e9, revisit = 1e9;
+  int sides[4] = {0, 0, 0, 0};
+  std::vector<Vector3d> path;
+  for (double t = 0; t <= 180.0; t += 0.05) {
+    const BodyState b = traj.at(t);
+    const Vector3d& p = b.p_w_b;
+    vmin = std::min(vmin, b.v_w.norm());
+    vmax = std::max(vmax, b.v_w.norm());
+    max_tilt = std::max(max_tilt, std::acos((b.q_w_b * Vector3d::UnitZ()).z()));
+    zmin = std::min(zmin, p.z());
+    const double d[4] = {std::abs(p.y()), std::abs(p.x() - 130), std::abs(p.y() + 40), std::abs(p.x() - 60)};
+    const int k = static_cast<int>(std::min_element(d, d + 4) - d);
+    if (d[k] < 0.5) ++sides[k];
+    // Inside a turn the path cuts the corner; elsewhere it is on a street's centre line.
+    const bool in_corner = (p.x() < 72 || p.x() > 118) && (p.y() > -12 || p.y() < -28);
+    if (!in_corner) max_off = std::max(max_off, d[k]);
+    path.push_back(p);
+  }
+  for (std::size_t i = 0; i < path.size(); ++i)  // a point 60-90 s later passes within reach
+    if (i * 0.05 >= 90.0 && i * 0.05 < 100.0) {
+      double best = 1e9;
+      for (std::size_t j = 0; j + 1200 <= i; ++j) best = std::min(best, (path[i] - path[j]).norm());
+      revisit = std::min(revisit, best);
+    }
+  EXPECT_GE(vmin, 1.5);
+  EXPECT_LE(vmax, 3.0);
+  EXPECT_LT(max_tilt, 15.0 * M_PI / 180);
+  EXPECT_GT(max_tilt, 3.0 * M_PI / 180);
+  EXPECT_GT(zmin, 3.4);  // trucks are 3.2 m tall
+  EXPECT_LT(max_off, 0.5);
+  for (int k = 0; k < 4; ++k) EXPECT_GT(sides[k], 100) << "side " << k;
+  EXPECT_LT(revisit, 1.0);
+}
+
+TEST(SimScene, TrafficSeedKeepsThePlaceAndChangesTheRun) {
+  const TextureBank tex(1, 3, 7);
+  auto world = [&](std::uint64_t traffic_seed, int parked, const std::string& scene) {
+    SceneOptions o;
+    o.scene = scene;
+    o.level = Level::kHigh;
+    o.seed = 1;
+    o.traffic_seed = traffic_seed;
+    o.parked = parked;
+    return buildWorld(o, tex);
+  };
+  auto sameQuads = [](const std::vector<Quad>& a, const std::vector<Quad>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if (!a[i].origin.isApprox(b[i].origin) || a[i].texture != b[i].texture) return false;
+    return true;
+  };
+  for (const char* scene : {"city", "parking_lot"}) {
+    const World w0 = world(0, 0, scene), w1 = world(1, 0, scene), w2 = world(2, 0, scene);
+    // traffic seed = seed is the single-seed run
+    EXPECT_TRUE(sameQuads(w0.statics, w1.statics)) << scene;
+    ASSERT_EQ(w0.vehicles.size(), w1.vehicles.size());
+    for (std::size_t i = 0; i < w0.vehicles.size(); ++i) EXPECT_EQ(w0.vehicles[i].offset, w1.vehicles[i].offset);
+    // another traffic seed: the same place, other traffic
+    EXPECT_TRUE(sameQuads(w0.statics, w2.statics)) << scene;
+    ASSERT_FALSE(w2.vehicles.empty());
+    EXPECT_NE(w0.vehicles[0].offset, w2.vehicles[0].offset) << scene;
+    // parked cars: static boxes (object id 0) in slots chosen by the traffic seed
+    const World p5 = world(5, 4, scene), p6 = world(6, 4, scene);
+    ASSERT_EQ(p5.parked.size(), 4u);
+    EXPECT_EQ(p5.statics.size(), w0.statics.size() + 4 * 5);
+    for (std::size_t i = w0.statics.size(); i < p5.statics.size(); ++i) EXPECT_EQ(p5.statics[i].object_id, 0);
+    bool moved = false;
+    for (std::size_t i = 0; i < 4; ++i) moved |= !p5.parked[i].first.isApprox(p6.parked[i].first);
+    EXPECT_TRUE(moved) << scene;
+    // distinct slots
+    for (std::size_t i = 0; i < 4; ++i)
+      for (std::size_t j = i + 1; j < 4; ++j)
+        EXPECT_GT((p5.parked[i].first - p5.parked[j].first).norm(), 2.0) << scene;
+  }
+  SceneOptions garage_block;
+  garage_block.scene = "parking_lot";
+  garage_block.route = Route::kBlock;
+  EXPECT_THROW(buildWorld(garage_block, tex), std::invalid_argument);
+}
+
 TEST(SimValidation, RigAndConfigAreEurocsAndTheImagesDiffer) {
   SimOptions standard, validation;
   standard.duration_s = validation.duration_s = 1.0;

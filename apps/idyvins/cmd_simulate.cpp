@@ -16,7 +16,9 @@ namespace {
 
 struct SimulateArgs {
   std::string scene = "city", level = "none", out;
-  std::uint64_t seed = 1;
+  std::uint64_t seed = 1, traffic_seed = 0;
+  int parked = 0;
+  std::string route = "default";
   double duration = 60.0, noise = 1.0, image_noise = 2.0, td_ms = 0.0;
   int threads = 2;
   bool opening_vehicle = false, standard_set = false;
@@ -73,6 +75,12 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
   if (!sim::parseLevel(level, o.scene.level))
     throw CLI::ValidationError("--level", "expected none|low|mid|high, got '" + level + "'");
   o.scene.seed = a.seed;
+  o.scene.traffic_seed = a.traffic_seed;
+  o.scene.parked = a.parked;
+  if (!sim::parseRoute(a.route, o.scene.route))
+    throw CLI::ValidationError("--route", "expected default|block, got '" + a.route + "'");
+  if (o.scene.route == sim::Route::kBlock && (scene != "city" || o.family != sim::Family::kStandard))
+    throw CLI::ValidationError("--route", "block is a drone's lap of a city block: --scene city, --family standard");
   o.scene.opening_vehicle = a.opening_vehicle;
   o.duration_s = a.duration;
   o.td_s = 1e-3 * a.td_ms;
@@ -131,7 +139,19 @@ void registerSimulate(CLI::App& app, int& exit_code) {
   cmd->add_option("--scene", a->scene, "city | parking_lot")->check(CLI::IsMember({"city", "parking_lot"}));
   cmd->add_option("--level", a->level, "moving objects: none | low | mid | high")
       ->check(CLI::IsMember({"none", "low", "mid", "high"}));
-  cmd->add_option("--seed", a->seed, "random seed (scene layout, traffic, noise)");
+  cmd->add_option("--seed", a->seed, "random seed of the place (layout, textures) and, unless --traffic-seed, of the run");
+  cmd->add_option("--traffic-seed", a->traffic_seed,
+                  "random seed of the run through the place: traffic, temporarily parked cars, the\n"
+                  "trajectory's start and phases, sensor noise (default: --seed). Same --seed, other\n"
+                  "--traffic-seed: the same place revisited with other vehicles");
+  cmd->add_option("--parked", a->parked,
+                  "temporarily parked cars placed from the traffic seed (garage centre, back street of\n"
+                  "the city block; static within the run, moved or gone in another run)")
+      ->check(CLI::Range(0, 24));
+  cmd->add_option("--route", a->route,
+                  "default: the scene's path (city: along the street; parking_lot: laps of the\n"
+                  "ellipse, 33 s each); block: laps around a city block (about 95 s each, 4 m up)")
+      ->check(CLI::IsMember({"default", "block"}));
   cmd->add_option("--duration", a->duration, "seconds of data");
   cmd->add_option("-o,--out", a->out, "output folder (with --standard-set: the parent folder)")->required();
   cmd->add_option("--noise", a->noise, "IMU noise scale (0 = perfect IMU, 1 = ADIS16448-like)");

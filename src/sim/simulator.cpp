@@ -121,7 +121,7 @@ Config rigConfig(const SimOptions& options) {
 
 void synthesizeImu(const Trajectory& traj, const SimOptions& o, std::vector<ImuSample>& imu,
                    std::vector<GroundTruthState>& truth) {
-  std::mt19937_64 rng(o.scene.seed * 6364136223846793005ull + 1442695040888963407ull);
+  std::mt19937_64 rng(o.scene.runSeed() * 6364136223846793005ull + 1442695040888963407ull);
   std::normal_distribution<double> g(0.0, 1.0);
   auto gauss3 = [&](double s) -> Vector3d { return s * Vector3d(g(rng), g(rng), g(rng)); };
   const ImuErrorModel& m = o.imu;
@@ -213,6 +213,8 @@ void writeImuAndTruth(const fs::path& mav0, const std::vector<ImuSample>& imu,
 }
 
 nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult& r, const Config& rig) {
+  nlohmann::json parked = nlohmann::json::array();
+  for (const auto& [lo, hi] : world.parked) parked.push_back({{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}});
   nlohmann::json objects = nlohmann::json::array();
   for (const auto& v : world.vehicles) {
     objects.push_back({{"id", v.id},
@@ -232,6 +234,9 @@ nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult
           {"scene", o.scene.scene},
           {"level", toString(o.scene.level)},
           {"seed", o.scene.seed},
+          {"traffic_seed", o.scene.runSeed()},
+          {"route", toString(o.scene.route)},
+          {"parked_vehicles", parked},
           {"family", toString(o.family)},
           {"opening_vehicle", o.scene.opening_vehicle},
           {"duration_s", o.duration_s},
@@ -289,8 +294,9 @@ Scene::Scene(const SimOptions& o)
       textures_(o.scene.seed, 3, 10,
                 o.family == Family::kValidation ? TextureStyle::kValidation : TextureStyle::kStandard),
       world_(buildWorld(o.scene, textures_)),
-      trajectory_(o.scene.scene, o.scene.seed, o.g_norm,
-                  o.family == Family::kValidation ? TrajectoryStyle::kHandheld : TrajectoryStyle::kDrone),
+      trajectory_(o.scene.scene, o.scene.runSeed(), o.g_norm,
+                  o.family == Family::kValidation ? TrajectoryStyle::kHandheld : TrajectoryStyle::kDrone,
+                  o.scene.route == Route::kBlock),
       frames_(static_cast<std::size_t>(std::floor(o.duration_s * o.camera_rate_hz + 1e-9)) + 1) {
   for (int c = 0; c < 2; ++c) renderers_.emplace_back(rig_.cams[c], textures_);
   const RealismOptions& r = o.realism;
@@ -364,7 +370,7 @@ SceneFrame Scene::renderFrame(std::size_t k) const {
   const std::vector<Quad> quads = world_.quadsAt(f.t_s);
   const BodyState s = trajectory_.at(f.t_s);
   f.T_w_b = bodyPose(s);
-  const std::uint64_t seed = options_.scene.seed * 1000003ull;
+  const std::uint64_t seed = options_.scene.runSeed() * 1000003ull;
   if (!options_.realism.enabled) {
     for (int c = 0; c < 2; ++c)
       f.cam[c] = renderers_[c].render(quads, f.T_w_b * rig_.T_b_c[c], world_.sky, options_.image_noise_sigma,

@@ -10,13 +10,93 @@ namespace idyvins::sim {
 
 using Eigen::Vector3d;
 
-Trajectory::Trajectory(const std::string& scene, std::uint64_t seed, double g_norm, TrajectoryStyle style)
+namespace {
+// The block: main street (y = 0) between the cross streets at x = 60 and x = 130, back street at y = -40.
+constexpr double kBlockX0 = 60.0, kBlockX1 = 130.0, kBlockY0 = 0.0, kBlockY1 = -40.0;
+}  // namespace
+
+double Trajectory::BlockRoute::heading(double s, double* curvature) const {
+  // Four sides, each a straight then a right turn; heading 0 (east) at the start.
+  double psi = 0, remaining = s;
+  for (int k = 0; k < 4; ++k) {
+    const double straight = k % 2 == 0 ? straight_x : straight_y;
+    if (remaining < straight) {
+      if (curvature) *curvature = 0;
+      return psi;
+    }
+    remaining -= straight;
+    if (remaining < turn_length) {
+      const double u = remaining / turn_length;
+      if (curvature) *curvature = -(M_PI / 2) * (1 - std::cos(2 * M_PI * u)) / turn_length;
+      return psi - (M_PI / 2) * (u - std::sin(2 * M_PI * u) / (2 * M_PI));
+    }
+    remaining -= turn_length;
+    psi -= M_PI / 2;
+  }
+  if (curvature) *curvature = 0;
+  return psi;
+}
+
+Eigen::Vector2d Trajectory::BlockRoute::position(double s) const {
+  // Cubic Hermite between table samples with the exact tangent (cos psi, sin psi).
+  const double x = s / step;
+  std::size_t i = static_cast<std::size_t>(std::floor(x));
+  if (i + 1 >= table.size()) i = table.size() - 2;
+  const double u = x - static_cast<double>(i);
+  const double psi0 = heading(static_cast<double>(i) * step, nullptr);
+  const double psi1 = heading(std::min(static_cast<double>(i + 1) * step, lap - 1e-12), nullptr);
+  const Eigen::Vector2d m0 = step * Eigen::Vector2d(std::cos(psi0), std::sin(psi0));
+  const Eigen::Vector2d m1 = step * Eigen::Vector2d(std::cos(psi1), std::sin(psi1));
+  const double u2 = u * u, u3 = u2 * u;
+  return (2 * u3 - 3 * u2 + 1) * table[i] + (u3 - 2 * u2 + u) * m0 + (-2 * u3 + 3 * u2) * table[i + 1] +
+         (u3 - u2) * m1;
+}
+
+Trajectory::Trajectory(const std::string& scene, std::uint64_t seed, double g_norm, TrajectoryStyle style,
+                       bool block)
     : style_(style), g_norm_(g_norm) {
   std::mt19937_64 rng(seed * 7919 + 3);
   std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
   const double two_pi = 2.0 * M_PI;
   if (scene != "city" && scene != "parking_lot")
     throw std::invalid_argument("unknown scene '" + scene + "' (expected city or parking_lot)");
+  if (block) {
+    if (scene != "city" || style != TrajectoryStyle::kDrone)
+      throw std::invalid_argument("the block route is flown by the drone in the city");
+    block_ = true;
+    BlockRoute& r = route_;
+    // How far a turn reaches along its entry (and, by symmetry, its exit) direction.
+    double reach = 0;
+    const int n_turn = 20000;
+    for (int i = 0; i < n_turn; ++i) {  // midpoint rule on a smooth integrand
+      const double u = (i + 0.5) / n_turn;
+      reach += std::cos((M_PI / 2) * (u - std::sin(2 * M_PI * u) / (2 * M_PI))) * r.turn_length / n_turn;
+    }
+    r.straight_x = (kBlockX1 - kBlockX0) - 2 * reach;
+    r.straight_y = (kBlockY0 - kBlockY1) - 2 * reach;
+    r.lap = 2 * (r.straight_x + r.straight_y) + 4 * r.turn_length;
+    r.start = Eigen::Vector2d(kBlockX0 + reach, kBlockY0);
+    // Position table: RK4 (Simpson) on dp/ds = (cos psi, sin psi), exact psi.
+    const std::size_t n = static_cast<std::size_t>(std::ceil(r.lap / r.step)) + 2;
+    r.table.resize(n);
+    r.table[0] = r.start;
+    auto tangent = [&](double s) {
+      const double psi = r.heading(std::fmod(s, r.lap), nullptr);
+      return Eigen::Vector2d(std::cos(psi), std::sin(psi));
+    };
+    for (std::size_t i = 1; i < n; ++i) {
+      const double s = static_cast<double>(i - 1) * r.step;
+      r.table[i] = r.table[i - 1] + r.step / 6 * (tangent(s) + 4 * tangent(s + r.step / 2) + tangent(s + r.step));
+    }
+    r.s0 = r.lap * std::uniform_real_distribution<double>(0.0, 1.0)(rng);  // where the run starts
+    // 4 m up (above the trucks' roofs where the turns cross the lanes), small world-frame waves.
+    c0_ = {0.0, 0.0, 4.0};
+    waves_[0] = {{{0.15, two_pi / 7.0, phase(rng)}, {0, 1, 0}, {0, 1, 0}}};
+    waves_[1] = {{{0.15, two_pi / 6.0, phase(rng)}, {0, 1, 0}, {0, 1, 0}}};
+    waves_[2] = {{{0.3, two_pi / 7.0, phase(rng)}, {0.08, two_pi / 2.9, phase(rng)}, {0, 1, 0}}};
+    yaw_wave_ = {0.3, two_pi / 8.0, phase(rng)};
+    return;
+  }
   if (style == TrajectoryStyle::kHandheld) {
     // Walking at about 1.3 m/s with a 1.8 Hz gait (vertical bob 3 cm, sideways sway at half
     // the step rate), the hand pitching and rolling a few degrees, looking around by ±0.5 rad.
@@ -72,6 +152,18 @@ Vector3d Trajectory::deriv(double t, int order) const {
     for (const Wave& w : waves_[axis])
       v += w.amp * std::pow(w.omega, order) * std::sin(w.omega * t + w.phase + order * M_PI / 2);
     out[axis] = v;
+  }
+  if (block_) {
+    const double s = std::fmod(route_.s0 + route_.speed * t, route_.lap);
+    double kappa = 0;
+    const double psi = route_.heading(s, &kappa);
+    const double v = route_.speed;
+    Eigen::Vector2d d;
+    if (order == 0) d = route_.position(s);
+    else if (order == 1) d = v * Eigen::Vector2d(std::cos(psi), std::sin(psi));
+    else d = v * v * kappa * Eigen::Vector2d(-std::sin(psi), std::cos(psi));
+    out.x() += d.x();
+    out.y() += d.y();
   }
   if (ellipse_) {
     const double th = ell_w_ * t + ell_phase_;

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace idyvins::sim {
 
@@ -29,8 +30,9 @@ enum class TrajectoryStyle {
 class Trajectory {
  public:
   /// Trajectory for a scene ("city" or "parking_lot"), phases from the seed.
+  /// `block`: laps around the city block (drone style only).
   Trajectory(const std::string& scene, std::uint64_t seed, double g_norm = 9.81,
-             TrajectoryStyle style = TrajectoryStyle::kDrone);
+             TrajectoryStyle style = TrajectoryStyle::kDrone, bool block = false);
   BodyState at(double t) const;
   Eigen::Quaterniond orientation(double t) const;
   Eigen::Vector3d position(double t) const;
@@ -47,6 +49,19 @@ class Trajectory {
   std::array<std::array<Wave, 3>, 3> waves_{};
   bool ellipse_ = false;  ///< parking lot: ellipse around the centre
   double ell_a_ = 14, ell_b_ = 8, ell_w_ = 0.19, ell_phase_ = 0;
+  /// Laps around the city block: a rounded rectangle at constant speed whose turns have a
+  /// smooth curvature (sin² profile, so acceleration and angular rate stay continuous).
+  struct BlockRoute {
+    double speed = 2.2, turn_length = 16.0, s0 = 0;
+    double straight_x = 0, straight_y = 0, lap = 0;  ///< lengths (m)
+    Eigen::Vector2d start = Eigen::Vector2d::Zero();
+    std::vector<Eigen::Vector2d> table;  ///< position every `step` metres along the lap
+    double step = 0.02;
+    double heading(double s, double* curvature) const;  ///< s in [0, lap)
+    Eigen::Vector2d position(double s) const;
+  };
+  bool block_ = false;
+  BlockRoute route_;
   Wave yaw_wave_{0, 1, 0};
   std::array<Wave, 2> pitch_waves_{}, roll_waves_{};  ///< handheld: pitch and roll (rad)
   TrajectoryStyle style_ = TrajectoryStyle::kDrone;

@@ -1,5 +1,6 @@
 #include "sim/world.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -182,14 +183,104 @@ void addCityTraffic(World& w, const SceneOptions& o, std::mt19937_64& rng, const
   addVehicles(w, lanes, lane_of, types, speeds, offsets, tex);
 }
 
+// The city block's back street: parallel to the main street, behind its south buildings.
+constexpr double kBackStreetY = -40.0;
+
+/// Buildings on the back street's south side and walls closing its ends (route kBlock).
+void addBackStreetStatics(World& w, std::mt19937_64& rng, const TextureBank& tex) {
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  const std::vector<std::pair<double, double>> blocks = {{-60, 53}, {67, 123}, {137, 193}, {207, 250}};
+  int building = 40;
+  for (const auto& [bx0, bx1] : blocks) {
+    double x = bx0;
+    while (x < bx1 - 4) {
+      const double len = std::min(bx1 - x, 10.0 + 14.0 * U(rng));
+      const double y_near = kBackStreetY - 12.0 - 1.5 * U(rng), height = 8.0 + 18.0 * U(rng);
+      addBox(w.statics, Vector3d(x, y_near - 14.0, 0), Vector3d(x + len, y_near, height),
+             tex.index(TextureKind::kFacade, building++), 0.8f + 0.4f * static_cast<float>(U(rng)), false, false);
+      x += len;
+    }
+  }
+  addBox(w.statics, Vector3d(262, -80, 0), Vector3d(280, -40, 22), tex.index(TextureKind::kFacade, 3), 1.0f, false, false);
+  addBox(w.statics, Vector3d(-95, -80, 0), Vector3d(-82, -40, 22), tex.index(TextureKind::kFacade, 4), 1.0f, false, false);
+}
+
+/// Traffic of a level for laps around the block: both directions on the main and the back
+/// street (slow trucks and vans in the lanes next to the rig), and on the cross streets.
+void addBlockTraffic(World& w, const SceneOptions& o, std::mt19937_64& rng, const TextureBank& tex) {
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::vector<LaneSpec> lanes;
+  for (double y0 : {0.0, kBackStreetY}) {
+    lanes.push_back({{-90, y0 - 5.5, 0}, {1, 0, 0}, 370});
+    lanes.push_back({{-90, y0 - 2.5, 0}, {1, 0, 0}, 370});
+    lanes.push_back({{280, y0 + 2.5, 0}, {-1, 0, 0}, 370});
+    lanes.push_back({{280, y0 + 5.5, 0}, {-1, 0, 0}, 370});
+  }
+  for (double cx : {60.0, 130.0}) {
+    lanes.push_back({{cx - 3, -80, 0}, {0, 1, 0}, 160});
+    lanes.push_back({{cx + 3, 80, 0}, {0, -1, 0}, 160});
+  }
+  const int per_lane = o.level == Level::kHigh ? 6 : o.level == Level::kMid ? 3 : o.level == Level::kLow ? 1 : 0;
+  std::vector<int> lane_of;
+  std::vector<std::string> types;
+  std::vector<double> speeds, offsets;
+  auto rnd = [&](double a, double b) { return a + (b - a) * U(rng); };
+  for (int lane = 0; lane < static_cast<int>(lanes.size()); ++lane) {
+    const bool near = lane == 1 || lane == 6;  // next to the rig, in its direction (east on main, west on back)
+    const int n = lane >= 8 ? (per_lane + 1) / 2 : per_lane;
+    for (int k = 0; k < n; ++k) {
+      lane_of.push_back(lane);
+      types.push_back(near ? (k % 2 ? "van" : "truck") : (k % 3 ? "car" : "van"));
+      speeds.push_back(near ? rnd(2.5, 3.5) : rnd(5, 10));
+      offsets.push_back(lanes[lane].length * (k + rnd(0.0, 0.6)) / std::max(1, n));
+    }
+  }
+  addVehicles(w, lanes, lane_of, types, speeds, offsets, tex);
+}
+
+/// Temporarily parked cars: `o.parked` of the scene's slots, chosen and textured from the run seed.
+void addParked(World& w, const SceneOptions& o, const TextureBank& tex) {
+  if (o.parked <= 0) return;
+  std::vector<Vector3d> slots;  // box minimum corners; boxes 4.4 x 1.8 x 1.5 m along x
+  if (o.scene == "parking_lot") {
+    for (double y : {-2.2, 0.4})
+      for (double x : {-9.5, -4.7, 0.1, 4.9}) slots.emplace_back(x, y, 0.0);
+  } else {
+    for (double y : {kBackStreetY - 10.7, kBackStreetY + 8.9})
+      for (double x = 68; x < 121; x += 6.5) slots.emplace_back(x, y, 0.0);
+  }
+  std::mt19937_64 rng(o.runSeed() * 15485863u + 7u);
+  std::shuffle(slots.begin(), slots.end(), rng);
+  const std::size_t n = std::min(slots.size(), static_cast<std::size_t>(o.parked));
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vector3d max = slots[k] + Vector3d(4.4, 1.8, 1.5);
+    addBox(w.statics, slots[k], max, tex.index(TextureKind::kVehicle, 11 + static_cast<int>(rng() % 97)),
+           0.85f + 0.1f * static_cast<float>(k % 3), false, false);
+    w.parked.emplace_back(slots[k], max);
+  }
+}
+
 World buildCity(const SceneOptions& o, const TextureBank& tex) {
   World w;
   w.scene = "city";
   w.sky = true;
   std::mt19937_64 rng(o.seed * 104729 + 11);
   addCityStatics(w, rng, tex);
+  if (o.route == Route::kBlock) {
+    std::mt19937_64 back(o.seed * 104729 + 17);
+    addBackStreetStatics(w, back, tex);
+  }
+  addParked(w, o, tex);
   if (o.level == Level::kNone && !o.opening_vehicle) return w;
-  addCityTraffic(w, o, rng, tex);
+  // The traffic continues the layout's random stream for a single-seed run (as it always did).
+  std::mt19937_64 own(o.runSeed() * 104729 + 13);
+  std::mt19937_64& traffic = o.runSeed() == o.seed ? rng : own;
+  if (o.route == Route::kBlock) {
+    if (o.level != Level::kNone) addBlockTraffic(w, o, traffic, tex);
+    if (o.opening_vehicle) throw std::invalid_argument("--opening-vehicle is for the street route only");
+  } else {
+    addCityTraffic(w, o, traffic, tex);
+  }
   return w;
 }
 
@@ -279,8 +370,10 @@ World buildParkingLot(const SceneOptions& o, const TextureBank& tex) {
   w.scene = "parking_lot";
   std::mt19937_64 rng(o.seed * 130363 + 5);
   addGarageStatics(w, rng, tex);
+  addParked(w, o, tex);
   if (o.level == Level::kNone && !o.opening_vehicle) return w;
-  addGarageTraffic(w, o, rng, tex);
+  std::mt19937_64 own(o.runSeed() * 130363 + 7);
+  addGarageTraffic(w, o, o.runSeed() == o.seed ? rng : own, tex);
   return w;
 }
 
@@ -353,7 +446,18 @@ const char* toString(Level level) {
   return names[static_cast<int>(level)];
 }
 
+bool parseRoute(const std::string& text, Route& route) {
+  if (text == "default") route = Route::kDefault;
+  else if (text == "block") route = Route::kBlock;
+  else return false;
+  return true;
+}
+
+const char* toString(Route route) { return route == Route::kBlock ? "block" : "default"; }
+
 World buildWorld(const SceneOptions& options, const TextureBank& textures) {
+  if (options.route == Route::kBlock && options.scene != "city")
+    throw std::invalid_argument("the block route is a lap of a city block (scene city)");
   if (options.scene == "city") return buildCity(options, textures);
   if (options.scene == "parking_lot") return buildParkingLot(options, textures);
   throw std::invalid_argument("unknown scene '" + options.scene + "' (expected city or parking_lot)");

@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sim/textures.h"
@@ -64,6 +65,8 @@ struct World {
   std::vector<Vehicle> vehicles;
   std::vector<Marker> markers;
   bool sky = false;  ///< outdoor: rays that hit nothing see the sky
+  /// Temporarily parked cars (SceneOptions::parked), also in `statics`: corners of their boxes.
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> parked;
   /// All quads at time t (statics, markers, vehicle faces).
   std::vector<Quad> quadsAt(double t) const;
 };
@@ -73,12 +76,31 @@ enum class Level { kNone, kLow, kMid, kHigh };
 bool parseLevel(const std::string& text, Level& level);
 const char* toString(Level level);
 
+/// Where the rig goes through the scene.
+enum class Route {
+  kDefault,  ///< city: along the street; parking_lot: laps of the ellipse (about 33 s each)
+  kBlock,    ///< city only: laps around a block (main street, cross street, back street, cross street)
+};
+bool parseRoute(const std::string& text, Route& route);
+const char* toString(Route route);
+
 /// Options for building a scene.
 struct SceneOptions {
   std::string scene = "city";  ///< city | parking_lot
   Level level = Level::kNone;
+  /// The place: layout, textures, materials, permanently parked cars.
   std::uint64_t seed = 1;
+  /// The run through the place: traffic, temporarily parked cars, the trajectory's phases
+  /// and start, sensor noise. 0: the same as `seed` (the data of a single-seed run).
+  std::uint64_t traffic_seed = 0;
+  /// Temporarily parked cars (static within the run, placed from the traffic seed: present in
+  /// one run, gone or elsewhere in another): slots in the garage's centre, on the back street
+  /// of the city block.
+  int parked = 0;
+  Route route = Route::kDefault;
   bool opening_vehicle = false;  ///< a vehicle passes close in front during the first seconds
+  /// The seed of the run (traffic_seed, or seed when it is 0).
+  std::uint64_t runSeed() const { return traffic_seed != 0 ? traffic_seed : seed; }
 };
 
 /// Builds a scene. Throws std::invalid_argument for an unknown scene name.
