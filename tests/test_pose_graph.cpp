@@ -160,3 +160,67 @@ TEST(PoseGraph, OneWrongLoopIsHeldOffByTheRobustLoss) {
 
 }  // namespace
 }  // namespace idyvins::map
+
+namespace idyvins::map {
+namespace {
+
+TEST(PoseGraph, ASessionRelocalizedInALoadedMapLandsOnItAndLeavesTheMapAlone) {
+  // The map: the first lap's true poses. The run: the second lap's drifting odometry in its own
+  // frame (turned by 1 rad about z and shifted), with times that overlap the map's.
+  const Laps l = twoLaps();
+  const std::size_t half = l.p_odom.size() / 2;
+  std::vector<PoseGraphNode> map_nodes;
+  for (std::size_t k = 0; k < half; ++k) {
+    PoseGraphNode n;
+    n.t_ns = static_cast<TimeNs>(k);
+    n.p_odom = n.p = l.p_true[k];
+    n.q_odom = l.q_true[k];
+    n.yaw = yawOf(l.q_true[k]);
+    map_nodes.push_back(n);
+  }
+  PoseGraph graph;
+  graph.loadMap(map_nodes, {});
+  EXPECT_EQ(graph.sessionStart(), half);
+  const Eigen::Matrix3d R_run = rotZ(1.0);
+  const Eigen::Vector3d t_run(5, -3, 0.2);
+  // odometry of the second lap, restarted from the truth at its first pose, then moved into the run's frame
+  std::vector<Eigen::Vector3d> p_run;
+  std::vector<Eigen::Quaterniond> q_run;
+  for (std::size_t k = half; k < l.p_odom.size(); ++k) {
+    const Eigen::Matrix3d drift = rotZ(yawOf(l.q_odom[half]) - yawOf(l.q_true[half])).transpose();
+    const Eigen::Vector3d p_lap = drift * (l.p_odom[k] - l.p_odom[half]) + l.p_true[half];
+    const Eigen::Quaterniond q_lap(drift * l.q_odom[k].toRotationMatrix());
+    p_run.push_back(R_run * p_lap + t_run);
+    q_run.push_back(Eigen::Quaterniond(R_run * q_lap.toRotationMatrix()));
+    graph.addKeyframe(static_cast<TimeNs>(k - half), p_run.back(), q_run.back());
+  }
+  EXPECT_TRUE(graph.nodes()[half].fixed);  // the session's gauge until it is tied to the map
+  EXPECT_THROW(graph.loadMap(map_nodes, {}), std::logic_error);
+  // correctedAt reads the session's nodes, not the map's (same times)
+  Eigen::Vector3d p;
+  Eigen::Quaterniond q;
+  graph.correctedAt(5, p_run[5], q_run[5], p, q);
+  EXPECT_LT((p - p_run[5]).norm(), 1e-9);
+  // tie it to the map with the transform its first keyframe implies, then loops to the map
+  graph.relocalize(-1.0, -(R_run.transpose() * t_run));
+  EXPECT_FALSE(graph.nodes()[half].fixed);
+  graph.correctedPose(half, p, q);
+  EXPECT_LT((p - l.p_true[half]).norm(), 1e-9);
+  for (std::size_t k = half; k < l.p_odom.size(); k += 10)
+    graph.addLoop({k - half, k, relativePose4(l.p_true[k - half], l.q_true[k - half], l.p_true[k], l.q_true[k])});
+  EXPECT_TRUE(graph.optimize().converged);
+  std::vector<Eigen::Vector3d> corrected, truth, odom_in_map;
+  for (std::size_t k = half; k < l.p_odom.size(); ++k) {
+    graph.correctedPose(k, p, q);
+    corrected.push_back(p);
+    truth.push_back(l.p_true[k]);
+    odom_in_map.push_back(R_run.transpose() * (p_run[k - half] - t_run));
+  }
+  for (std::size_t k = 0; k < half; ++k) EXPECT_EQ(graph.nodes()[k].p, l.p_true[k]) << "map node " << k << " moved";
+  const double before = rmse(odom_in_map, truth), after = rmse(corrected, truth);
+  EXPECT_GT(before, 0.5);
+  EXPECT_LT(after, 0.2 * before) << "before " << before << " m, after " << after << " m";
+}
+
+}  // namespace
+}  // namespace idyvins::map

@@ -27,9 +27,9 @@ namespace idyvins::app {
 namespace {
 
 struct RunArgs {
-  std::string config, dataset, out, mode, dump_observations, groundtruth_topic, save_map;
+  std::string config, dataset, out, mode, dump_observations, groundtruth_topic, save_map, load_map;
   std::size_t max_frames = 0;
-  bool solver_time_limit = false;
+  bool solver_time_limit = false, localization_only = false;
   int threads = 2, feedback_delay = -1;
 };
 
@@ -110,6 +110,16 @@ void printLoops(const nlohmann::json& l) {
               l["mean_detect_ms_per_keyframe"].get<double>(), l["mean_graph_ms_per_solve"].get<double>());
   if (l.contains("ate_rmse_m")) std::printf("; ATE RMSE with loops %.4f m", l["ate_rmse_m"].get<double>());
   std::printf("\n");
+  if (const auto& m = l["map"]; !m.is_null()) {
+    if (m["relocalized"].get<bool>())
+      std::printf("map: %zu keyframes loaded; relocalized at t = %lld ns, %zu loops to the map\n",
+                  m["loaded_keyframes"].get<std::size_t>(), m["first_relocalization_t_ns"].get<long long>(),
+                  m["loops_to_map"].get<std::size_t>());
+    else
+      std::fprintf(stderr, "warning: %zu map keyframes loaded, never relocalized in the map (%zu unconfirmed "
+                   "matches): no trajectory_loop.tum; the poses are in the run's own odometry frame\n",
+                   m["loaded_keyframes"].get<std::size_t>(), m["unconfirmed_matches"].get<std::size_t>());
+  }
 }
 
 void printSummary(const nlohmann::json& s, const std::string& out) {
@@ -169,7 +179,7 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
                 100 * c["static_map_fraction_on_moving"].get<double>());
   std::printf("wrote %s/trajectory.tum, trajectory.csv, state.csv, stats.json, resets.csv, map_static.ply, map_dynamic.ply, "
               "map_all.ply%s\n",
-              out.c_str(), s["loop_closure"].is_null() ? "" : ", trajectory_loop.tum, loops.csv");
+              out.c_str(), s["loop_closure"].is_null() ? "" : ", trajectory_loop.tum, loops.csv, map_static_loop.ply");
 }
 
 pipeline::System makeSystem(const RunArgs& a, Config& config) {
@@ -177,7 +187,11 @@ pipeline::System makeSystem(const RunArgs& a, Config& config) {
   if (!a.mode.empty() && !parseMode(a.mode, config.mode))
     throw CLI::ValidationError("--mode", "expected " + modeNames() + ", got '" + a.mode + "'");
   if (a.solver_time_limit) config.estimator.time_limited = true;
-  if (!a.save_map.empty()) config.loop.enabled = true;  // the map is the loop closer's database
+  if (!a.save_map.empty() || !a.load_map.empty()) config.loop.enabled = true;  // the map is the loop closer's database
+  if (a.localization_only && a.load_map.empty())
+    throw CLI::ValidationError("--localization-only", "needs --load-map DIR (the map to localize in)");
+  if (a.localization_only && !a.save_map.empty())
+    throw CLI::ValidationError("--save-map", "--localization-only leaves the map as loaded: nothing to save");
   pipeline::RunOptions run;
   run.pipelined = a.threads == 2;
   run.feedback_delay = a.feedback_delay >= 0 ? a.feedback_delay : (run.pipelined ? 1 : 0);
@@ -207,6 +221,7 @@ struct StatsFile {
 int runRun(const RunArgs& a) {
   Config config;
   pipeline::System system = makeSystem(a, config);
+  if (!a.load_map.empty()) system.loadMap(map::loadMap(a.load_map), !a.localization_only, a.load_map);
   Input in = openInput(a.dataset, config, a.groundtruth_topic);
   StagedFolder folder(a.out);  // OUT.partial-PID until complete, then swapped for OUT
   const std::size_t total = a.max_frames ? std::min(a.max_frames, in.source->frameCount()) : in.source->frameCount();
@@ -235,7 +250,11 @@ int runRun(const RunArgs& a) {
   if (in.has_masks) summary["classification"] = pipeline::toJson(observations.classify(result));
   if (!a.dump_observations.empty()) observations.writeCsv(a.dump_observations, result);
   pipeline::writeResultFiles(folder.path(), result);
-  if (!a.save_map.empty()) map::saveMap(a.save_map, system.loopCloser()->savedMap());
+  if (!a.save_map.empty()) {
+    map::SavedMap saved = system.loopCloser()->savedMap();
+    saved.rig = pipeline::rigFingerprint(config);
+    map::saveMap(a.save_map, saved);
+  }
   pipeline::addAte(summary, in.groundtruth, result);
   stats.finish(summary);
   folder.publish();
@@ -258,7 +277,8 @@ void registerRun(CLI::App& app, int& exit_code) {
       "OUT/state.csv (pose, velocity, biases; EuRoC ground-truth columns)\n"
       "OUT/stats.json (per-frame timing, feature counts, status, resets), OUT/resets.csv, and the maps as PLY;\n"
       "with the config's loop_closure: 1 also OUT/trajectory_loop.tum (every pose corrected by the final\n"
-      "4-DoF pose graph) and OUT/loops.csv (each loop closed).\n"
+      "4-DoF pose graph), OUT/loops.csv (each loop closed) and OUT/map_static_loop.ply (the static\n"
+      "landmarks of the loop closer's keyframes, moved with the corrected poses).\n"
       "Offline and deterministic: frames are processed in order as fast as possible and each\n"
       "solve stops on max_num_iterations or convergence, never on the clock, so the same input\n"
       "and config give the same outputs whatever the machine's load (timing fields aside).\n"
@@ -277,6 +297,12 @@ void registerRun(CLI::App& app, int& exit_code) {
   cmd->add_option("--save-map", a->save_map,
                   "write the keyframe database and pose graph to this folder (map.json, keyframes.bin,\n"
                   "loops.csv; docs/loop-closure.md); turns loop closure on");
+  cmd->add_option("--load-map", a->load_map,
+                  "start in a map saved by --save-map: relocalize against it (the first match the next keyframes\n"
+                  "confirm), then close loops against it; trajectory_loop.tum is in the map's frame (written once\n"
+                  "relocalized). With --save-map the map is extended by this run; turns loop closure on");
+  cmd->add_flag("--localization-only", a->localization_only,
+                "with --load-map: localize in the map without adding this run's keyframes to it");
   cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--threads", a->threads,

@@ -61,7 +61,7 @@ std::uint32_t KeyframeDatabase::add(Keyframe keyframe) {
 }
 
 std::vector<PlaceCandidate> KeyframeDatabase::query(const std::vector<Descriptor>& descriptors,
-                                                    TimeNs before_t_ns) const {
+                                                    TimeNs before_t_ns, std::uint32_t any_age_below) const {
   std::vector<PlaceCandidate> out;
   if (descriptors.empty() || owner_.empty()) return out;
   const int k = std::max(1, options_.neighbours);
@@ -80,7 +80,7 @@ std::vector<PlaceCandidate> KeyframeDatabase::query(const std::vector<Descriptor
       const auto idx = static_cast<std::size_t>(q * k + j);
       if (labels[idx] < 0 || distances[idx] > options_.max_hamming) continue;
       const std::uint32_t kf = owner_[static_cast<std::size_t>(labels[idx])];
-      if (keyframes_[kf].t_ns < before_t_ns && voted.insert(kf).second) ++votes[kf];
+      if ((kf < any_age_below || keyframes_[kf].t_ns < before_t_ns) && voted.insert(kf).second) ++votes[kf];
     }
   }
   for (const auto& [kf, v] : votes)

@@ -57,9 +57,10 @@ class KeyframeDatabase {
 
   /// Adds a keyframe (its id becomes its index) and its descriptors to the index.
   std::uint32_t add(Keyframe keyframe);
-  /// Keyframes older than `before_t_ns` whose descriptors the query's are near, best first
-  /// (most votes, then lowest id: deterministic).
-  std::vector<PlaceCandidate> query(const std::vector<Descriptor>& descriptors, TimeNs before_t_ns) const;
+  /// Keyframes older than `before_t_ns` (or with an id below `any_age_below`: a loaded map's)
+  /// whose descriptors the query's are near, best first (most votes, then lowest id: deterministic).
+  std::vector<PlaceCandidate> query(const std::vector<Descriptor>& descriptors, TimeNs before_t_ns,
+                                    std::uint32_t any_age_below = 0) const;
 
   std::size_t size() const { return keyframes_.size(); }
   const Keyframe& keyframe(std::uint32_t id) const { return keyframes_.at(id); }

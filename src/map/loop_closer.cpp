@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <set>
+#include <stdexcept>
 
 namespace idyvins::map {
 
@@ -39,7 +41,18 @@ LoopCloser::~LoopCloser() {
   if (worker_.joinable()) worker_.join();
 }
 
+void LoopCloser::loadMap(const SavedMap& map, bool extend) {
+  if (added_ || database_.size() > 0) throw std::logic_error("LoopCloser::loadMap after keyframes were added");
+  if (map.keyframes.size() != map.nodes.size()) throw std::invalid_argument("LoopCloser::loadMap: one node per keyframe");
+  for (const Keyframe& k : map.keyframes) database_.add(k);
+  graph_.loadMap(map.nodes, map.loops);
+  loaded_ = map.keyframes.size();
+  extend_ = extend;
+  stats_.map_keyframes = loaded_;
+}
+
 void LoopCloser::add(LoopKeyframe keyframe) {
+  added_ = true;
   if (have_last_ && (keyframe.p_w_b - last_p_).norm() < options_.min_keyframe_distance_m &&
       keyframe.q_w_b.angularDistance(last_q_) < options_.min_keyframe_turn_rad) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -117,10 +130,10 @@ void LoopCloser::handle(LoopKeyframe& in) {
     query.xy.push_back(xy);
     query.descriptors.push_back(desc[i]);
   }
-  const std::uint32_t id = static_cast<std::uint32_t>(database_.size());
-  graph_.addKeyframe(in.t_ns, in.p_w_b, in.q_w_b);
-  const bool closed = tryLoop(kf, query, id);
-  database_.add(std::move(kf));
+  // Node index = database id unless localizing only (then the database keeps the map alone).
+  const auto node = static_cast<std::uint32_t>(graph_.addKeyframe(in.t_ns, in.p_w_b, in.q_w_b));
+  const bool closed = tryLoop(kf, query, node);
+  if (extend_) database_.add(std::move(kf));
   ++stats_.keyframes;
   stats_.sum_detect_ms += msSince(t0);
   if (closed) {
@@ -131,36 +144,111 @@ void LoopCloser::handle(LoopKeyframe& in) {
   }
 }
 
-bool LoopCloser::tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint32_t new_id) {
+bool LoopCloser::tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint32_t new_node) {
   const TimeNs before = now.t_ns - static_cast<TimeNs>(options_.min_age_s * 1e9);
-  if (database_.size() == 0 || database_.keyframe(0).t_ns >= before) return false;  // nothing old enough yet
-  for (const PlaceCandidate& c : database_.query(query.descriptors, before)) {
+  if (database_.size() == 0) return false;
+  if (loaded_ == 0 && database_.keyframe(0).t_ns >= before) return false;  // nothing old enough yet
+  const auto map_ids = static_cast<std::uint32_t>(loaded_);
+  for (const PlaceCandidate& c : database_.query(query.descriptors, before, map_ids)) {
     ++stats_.candidates_checked;
     const Keyframe& old = database_.keyframe(c.keyframe);
     const PlaceVerification v = verifyPlace(old, query, T_b_c_, options_.verify);
     if (!v.accepted) continue;
-    // The loop against the odometry's own guess: a wild jump or a tilt gravity rules out is no loop.
-    const RelativePose4 rel = relativePose4(old.p_w_b, old.q_w_b, v.p_w_b, v.q_w_b);
-    const RelativePose4 odo = relativePose4(old.p_w_b, old.q_w_b, now.p_w_b, now.q_w_b);
-    if ((rel.t_from_to - odo.t_from_to).norm() > options_.max_loop_distance_m ||
-        std::abs(wrapAngle(rel.dyaw - odo.dyaw)) > options_.max_loop_yaw_rad ||
-        tiltDifference(v.q_w_b, now.q_w_b) > options_.max_tilt_rad) {
+    // The loop against what gravity observes: PnP's roll and pitch must be the odometry's.
+    if (tiltDifference(v.q_w_b, now.q_w_b) > options_.max_tilt_rad) {
       ++stats_.refused_by_consistency;
       continue;
     }
-    graph_.addLoop({c.keyframe, new_id, rel});
-    loops_.push_back({c.keyframe, new_id, old.t_ns, now.t_ns, c.votes, v.matches, v.inliers, rel});
+    const RelativePose4 rel = relativePose4(old.p_w_b, old.q_w_b, v.p_w_b, v.q_w_b);
+    if (c.keyframe < map_ids) {
+      if (mapMatch(now, c.keyframe, new_node, rel, c, v.matches, v.inliers)) return true;
+      continue;
+    }
+    // Within the run: against the odometry's own guess, a wild jump is no loop.
+    const RelativePose4 odo = relativePose4(old.p_w_b, old.q_w_b, now.p_w_b, now.q_w_b);
+    if ((rel.t_from_to - odo.t_from_to).norm() > options_.max_loop_distance_m ||
+        std::abs(wrapAngle(rel.dyaw - odo.dyaw)) > options_.max_loop_yaw_rad) {
+      ++stats_.refused_by_consistency;
+      continue;
+    }
+    graph_.addLoop({c.keyframe, new_node, rel});
+    loops_.push_back({c.keyframe, new_node, old.t_ns, now.t_ns, c.votes, v.matches, v.inliers, rel, false});
     ++stats_.loops;
     return true;
   }
   return false;
 }
 
+bool LoopCloser::mapMatch(const Keyframe& now, std::uint32_t old_id, std::uint32_t new_node, const RelativePose4& rel,
+                          const PlaceCandidate& c, int matches, int inliers) {
+  // Where the match puts the new keyframe in the map: the old keyframe's map pose, then `rel`.
+  Eigen::Vector3d p_old, p_now;
+  Eigen::Quaterniond q_old, q_now;
+  graph_.correctedPose(old_id, p_old, q_old);
+  graph_.correctedPose(new_node, p_now, q_now);
+  const Eigen::Vector3d p_map = p_old + q_old * rel.t_from_to;
+  const double yaw_map = wrapAngle(yawOf(q_old) + rel.dyaw);
+  const LoopEvent event{old_id, new_node, database_.keyframe(old_id).t_ns, now.t_ns, c.votes, matches, inliers, rel,
+                        true};
+  if (stats_.relocalized) {  // tied to the map already: against the current map pose
+    if ((p_map - p_now).norm() > options_.max_loop_distance_m ||
+        std::abs(wrapAngle(yaw_map - yawOf(q_now))) > options_.max_loop_yaw_rad) {
+      ++stats_.refused_by_consistency;
+      return false;
+    }
+    graph_.addLoop({old_id, new_node, rel});
+    loops_.push_back(event);
+    ++stats_.loops;
+    ++stats_.map_loops;
+    return true;
+  }
+  // Not yet: the transform map <- odometry this match implies, confirmed by a later keyframe's.
+  const double yaw = wrapAngle(yaw_map - yawOf(q_now));
+  const Eigen::Vector3d t = p_map - rotZ(yaw) * p_now;
+  if (pending_.valid && pending_.node == new_node) return false;  // one hypothesis per keyframe (the best)
+  const bool confirms = pending_.valid &&
+                        new_node - pending_.node <= static_cast<std::uint32_t>(options_.relocalization_window) &&
+                        std::abs(wrapAngle(yaw - pending_.yaw)) < options_.relocalization_tolerance_rad &&
+                        (t - pending_.t).norm() < options_.relocalization_tolerance_m;
+  if (!confirms) {
+    if (pending_.valid) ++stats_.relocalizations_unconfirmed;
+    pending_ = {true, yaw, t, new_node, event};
+    return false;
+  }
+  graph_.relocalize(yaw, t);
+  for (const LoopEvent& e : {pending_.event, event}) {
+    graph_.addLoop({e.old_keyframe, e.new_keyframe, e.relative});
+    loops_.push_back(e);
+    ++stats_.loops;
+    ++stats_.map_loops;
+  }
+  pending_.valid = false;
+  stats_.relocalized = true;
+  stats_.first_relocalization_t_ns = now.t_ns;
+  return true;
+}
+
+std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> LoopCloser::correctedLandmarks() const {
+  const std::size_t n = loaded_ > 0 && !stats_.relocalized ? loaded_ : database_.size();
+  std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> out;
+  std::set<std::pair<bool, std::uint64_t>> seen;  // landmark ids restart with each session
+  for (std::size_t i = 0; i < n; ++i)
+    for (const KeyframeLandmark& l : database_.keyframe(static_cast<std::uint32_t>(i)).landmarks)
+      if (seen.insert({i < loaded_, l.id}).second) out.emplace_back(l.id, graph_.correctedPoint(i, l.p_w));
+  return out;
+}
+
 SavedMap LoopCloser::savedMap() const {
+  // A run that loaded a map but never tied itself to it has its keyframes in another frame: the
+  // map is saved as loaded. Localizing only, the database holds the map alone.
+  const std::size_t n = loaded_ > 0 && !stats_.relocalized ? loaded_ : database_.size();
   SavedMap m;
-  m.keyframes = database_.keyframes();
-  m.nodes = graph_.nodes();
-  m.loops = graph_.loops();
+  m.keyframes.assign(database_.keyframes().begin(), database_.keyframes().begin() + static_cast<std::ptrdiff_t>(n));
+  m.nodes.assign(graph_.nodes().begin(), graph_.nodes().begin() + static_cast<std::ptrdiff_t>(n));
+  for (const LoopEdge& l : graph_.loops())
+    if (l.from < n && l.to < n) m.loops.push_back(l);
+  for (PoseGraphNode& node : m.nodes) node.fixed = false;
+  if (!m.nodes.empty()) m.nodes.front().fixed = true;
   return m;
 }
 

@@ -43,10 +43,11 @@ struct LoopKeyframe {
 
 /// A loop that was closed.
 struct LoopEvent {
-  std::uint32_t old_keyframe = 0, new_keyframe = 0;
+  std::uint32_t old_keyframe = 0, new_keyframe = 0;  ///< pose-graph node indices
   TimeNs old_t_ns = 0, new_t_ns = 0;
   int votes = 0, matches = 0, inliers = 0;
   RelativePose4 relative;  ///< new keyframe in the old one's frame (from PnP)
+  bool to_map = false;     ///< the old keyframe is from a loaded map (a relocalization)
 };
 
 struct LoopStats {
@@ -54,6 +55,12 @@ struct LoopStats {
   double sum_detect_ms = 0;  ///< descriptors, lookup, geometric check
   double sum_graph_ms = 0;   ///< pose-graph solves
   std::size_t graph_solves = 0;
+  // With a loaded map (loadMap):
+  std::size_t map_keyframes = 0;    ///< keyframes loaded
+  std::size_t map_loops = 0;        ///< loops to the map's keyframes (relocalizations included)
+  std::size_t relocalizations_unconfirmed = 0;  ///< map matches not confirmed by the next keyframes
+  bool relocalized = false;
+  TimeNs first_relocalization_t_ns = 0;  ///< the keyframe that confirmed the first relocalization
 };
 
 class LoopCloser {
@@ -64,6 +71,14 @@ class LoopCloser {
   ~LoopCloser();
   LoopCloser(const LoopCloser&) = delete;
   LoopCloser& operator=(const LoopCloser&) = delete;
+
+  /// Starts in a saved map's frame (before the first add()): its keyframes join the database and
+  /// the pose graph (fixed); the run's keyframes are matched against them whatever their age. The
+  /// first match to the map that the next keyframes confirm (the same map <- odometry transform
+  /// within LoopOptions' relocalization tolerances) ties the run to the map (relocalization);
+  /// later ones are loops. `extend` false: localization only, the run's keyframes are not added
+  /// to the database (the map stays as loaded). Throws std::logic_error after add().
+  void loadMap(const SavedMap& map, bool extend);
 
   /// Takes a keyframe (skipped when it is too near the last one taken: LoopOptions).
   void add(LoopKeyframe keyframe);
@@ -76,11 +91,20 @@ class LoopCloser {
   const LoopStats& stats() const { return stats_; }
   /// The keyframe database and pose graph, as saveMap writes them (after finish()).
   SavedMap savedMap() const;
+  /// The database's static landmarks moved by the correction of the keyframe that first saw
+  /// each (the static map re-anchored to the corrected poses; one point per landmark id and
+  /// session), in database order. Without a relocalization, a loaded map's only.
+  std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> correctedLandmarks() const;
 
  private:
   void run();
   void handle(LoopKeyframe& keyframe);
-  bool tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint32_t new_id);
+  bool tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint32_t new_node);
+  /// A verified match of the new node to a map keyframe (PnP pose p_w_b/q_w_b in the old
+  /// keyframe's odometry frame): relocalizes once confirmed, else a loop checked against the
+  /// current map pose. True when it became a loop edge.
+  bool mapMatch(const Keyframe& now, std::uint32_t old_id, std::uint32_t new_node, const RelativePose4& rel,
+                const PlaceCandidate& c, int matches, int inliers);
 
   LoopOptions options_;
   std::unique_ptr<camera::CameraModel> camera_;
@@ -89,6 +113,17 @@ class LoopCloser {
   PoseGraph graph_;
   std::vector<LoopEvent> loops_;
   LoopStats stats_;
+  std::size_t loaded_ = 0;  ///< keyframes from a loaded map (database ids below it)
+  bool extend_ = true;
+  bool added_ = false;
+  /// An unconfirmed relocalization: the map <- odometry transform one keyframe's match implied.
+  struct Hypothesis {
+    bool valid = false;
+    double yaw = 0;
+    Eigen::Vector3d t = Eigen::Vector3d::Zero();
+    std::uint32_t node = 0;
+    LoopEvent event;
+  } pending_;
   bool have_last_ = false;  ///< the last keyframe taken (add(), caller's thread)
   Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();
   Eigen::Quaterniond last_q_ = Eigen::Quaterniond::Identity();

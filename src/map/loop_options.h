@@ -48,6 +48,11 @@ struct LoopOptions {
   double max_loop_distance_m = 20.0;  ///< a loop's translation from the odometry guess beyond this is refused
   double max_loop_yaw_rad = 0.5;      ///< likewise its yaw
   double max_tilt_rad = 0.1;          ///< PnP's roll/pitch disagreeing with the odometry's by more: refused
+  /// Relocalization in a loaded map: a match is confirmed by another within this many keyframes
+  /// implying the same map <- odometry transform (within the two tolerances below).
+  int relocalization_window = 3;
+  double relocalization_tolerance_m = 0.5;
+  double relocalization_tolerance_rad = 0.05;
   PlaceRecognitionOptions recognition;
   VerifyOptions verify;
   PoseGraphOptions graph;

@@ -203,7 +203,8 @@ void saveMap(const std::string& dir, const SavedMap& map) {
   const nlohmann::json header = {{"format", kFormat},         {"version", kMapFormatVersion},
                                  {"keyframes", map.keyframes.size()}, {"landmarks", landmarks},
                                  {"loops", map.loops.size()}, {"descriptor_bits", 256},
-                                 {"keyframes_fnv1a64", std::to_string(fnv1a(w.bytes()))}};
+                                 {"keyframes_fnv1a64", std::to_string(fnv1a(w.bytes()))},
+                                 {"rig", map.rig}};
   writeAtomically(fs::path(dir) / "keyframes.bin", w.bytes());
   writeAtomically(fs::path(dir) / "loops.csv", loops.str());
   writeAtomically(fs::path(dir) / "map.json", header.dump(1) + "\n");  // last: its presence means complete
@@ -235,6 +236,10 @@ SavedMap loadMap(const std::string& dir) {
   for (std::uint32_t i = 0; i < n; ++i) readKeyframe(r, i, map);
   if (!r.atEnd()) r.fail("bytes after the last keyframe");
   map.loops = readLoops((fs::path(dir) / "loops.csv").string(), n);
+  if (header.contains("rig")) {
+    if (!header["rig"].is_string()) throw InputError(json_path.string(), "\"rig\" is not a string");
+    map.rig = header["rig"].get<std::string>();
+  }
   return map;
 }
 

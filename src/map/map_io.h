@@ -21,6 +21,8 @@ struct SavedMap {
   std::vector<Keyframe> keyframes;     ///< in database order (id = index)
   std::vector<PoseGraphNode> nodes;    ///< one per keyframe, same order
   std::vector<LoopEdge> loops;
+  /// The left camera the map was built with (pipeline::rigFingerprint; empty: not recorded).
+  std::string rig;
 };
 
 /// Writes `map` into `dir` (created if missing; files written under temporary names and

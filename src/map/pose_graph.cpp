@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/so3.h"
 
@@ -89,17 +90,35 @@ std::size_t PoseGraph::addKeyframe(TimeNs t_ns, const Eigen::Vector3d& p_odom, c
   n.q_odom = q_odom.normalized();
   n.p = p_odom;
   n.yaw = yawOf(n.q_odom);
-  if (!nodes_.empty()) {  // the newest node's correction (every node added since the last solve has it too)
+  const bool first = nodes_.size() == session_start_;
+  if (!first) {  // the newest node's correction (every node added since the last solve has it too)
     Eigen::Quaterniond q;
     applyCorrection(nodes_.back(), p_odom, n.q_odom, n.p, q);
     n.yaw = yawOf(q);
   }
-  n.fixed = nodes_.empty();
+  n.fixed = first;
   nodes_.push_back(n);
   return nodes_.size() - 1;
 }
 
 void PoseGraph::addLoop(const LoopEdge& loop) { loops_.push_back(loop); }
+
+void PoseGraph::loadMap(const std::vector<PoseGraphNode>& nodes, const std::vector<LoopEdge>& loops) {
+  if (!nodes_.empty()) throw std::logic_error("PoseGraph::loadMap after keyframes were added");
+  nodes_ = nodes;
+  for (PoseGraphNode& n : nodes_) n.fixed = true;
+  loops_ = loops;
+  session_start_ = nodes_.size();
+}
+
+void PoseGraph::relocalize(double yaw, const Eigen::Vector3d& t) {
+  const Eigen::Matrix3d R = rotZ(yaw);
+  for (std::size_t i = session_start_; i < nodes_.size(); ++i) {
+    nodes_[i].p = R * nodes_[i].p + t;
+    nodes_[i].yaw = wrapAngle(nodes_[i].yaw + yaw);
+  }
+  if (session_start_ < nodes_.size()) nodes_[session_start_].fixed = false;
+}
 
 void PoseGraph::setFixed(std::size_t node, bool fixed) { nodes_.at(node).fixed = fixed; }
 
@@ -109,7 +128,10 @@ PoseGraphSolve PoseGraph::optimize() {
   ceres::Problem problem;
   const int k = options_.odometry_neighbours;
   for (std::size_t j = 1; j < nodes_.size(); ++j) {
-    for (std::size_t i = j > static_cast<std::size_t>(k) ? j - k : 0; i < j; ++i) {
+    // Odometry edges within a session only; the loaded map's nodes are fixed (no edges among them).
+    if (j < session_start_) continue;
+    const std::size_t first = j == session_start_ ? j : std::max(session_start_, j > static_cast<std::size_t>(k) ? j - k : 0);
+    for (std::size_t i = first; i < j; ++i) {
       const PoseGraphNode &a = nodes_[i], &b = nodes_[j];
       problem.AddResidualBlock(new FourDofEdgeCost(relativePose4(a.p_odom, a.q_odom, b.p_odom, b.q_odom),
                                                    tiltOf(a.q_odom), options_.odometry_sigma_t,
@@ -118,13 +140,14 @@ PoseGraphSolve PoseGraph::optimize() {
     }
   }
   for (const LoopEdge& l : loops_) {
+    if (nodes_[l.from].fixed && nodes_[l.to].fixed) continue;  // the loaded map's own loops
     problem.AddResidualBlock(
         new FourDofEdgeCost(l.measured, tiltOf(nodes_[l.from].q_odom), options_.loop_sigma_t, options_.loop_sigma_yaw),
         new ceres::HuberLoss(options_.loop_huber), nodes_[l.from].p.data(), &nodes_[l.from].yaw,
         nodes_[l.to].p.data(), &nodes_[l.to].yaw);
   }
   for (PoseGraphNode& n : nodes_) {
-    if (!n.fixed) continue;
+    if (!n.fixed || !problem.HasParameterBlock(n.p.data())) continue;  // a map node no edge reaches
     problem.SetParameterBlockConstant(n.p.data());
     problem.SetParameterBlockConstant(&n.yaw);
   }
@@ -143,6 +166,11 @@ PoseGraphSolve PoseGraph::optimize() {
   return out;
 }
 
+Eigen::Vector3d PoseGraph::correctedPoint(std::size_t i, const Eigen::Vector3d& p_odom) const {
+  const PoseGraphNode& n = nodes_.at(i);
+  return rotZ(wrapAngle(n.yaw - yawOf(n.q_odom))) * (p_odom - n.p_odom) + n.p;
+}
+
 void PoseGraph::correctedPose(std::size_t i, Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const {
   const PoseGraphNode& n = nodes_.at(i);
   p_w_b = n.p;
@@ -153,10 +181,10 @@ void PoseGraph::correctedAt(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Ei
                             Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const {
   p_w_b = p_odom;
   q_w_b = q_odom;
-  if (nodes_.empty()) return;
-  const auto it = std::upper_bound(nodes_.begin(), nodes_.end(), t_ns,
-                                   [](TimeNs t, const PoseGraphNode& n) { return t < n.t_ns; });
-  applyCorrection(it == nodes_.begin() ? nodes_.front() : *std::prev(it), p_odom, q_odom, p_w_b, q_w_b);
+  if (nodes_.size() <= session_start_) return;
+  const auto begin = nodes_.begin() + static_cast<std::ptrdiff_t>(session_start_);
+  const auto it = std::upper_bound(begin, nodes_.end(), t_ns, [](TimeNs t, const PoseGraphNode& n) { return t < n.t_ns; });
+  applyCorrection(it == begin ? *begin : *std::prev(it), p_odom, q_odom, p_w_b, q_w_b);
 }
 
 }  // namespace idyvins::map

@@ -74,22 +74,35 @@ class PoseGraph {
   explicit PoseGraph(const PoseGraphOptions& options = {});
 
   /// Appends a keyframe with its odometry pose; its corrected pose starts as the odometry
-  /// pose moved by the newest node's correction. Returns its index.
+  /// pose moved by the correction of the session's newest node (none for the session's first
+  /// node, which is held fixed: the gauge until the session is tied to a map). Returns its index.
   std::size_t addKeyframe(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom);
   void addLoop(const LoopEdge& loop);
   void setFixed(std::size_t node, bool fixed);
+
+  /// A loaded map: appends its nodes (held fixed) and loop edges before any keyframe of this run,
+  /// and starts a new session: the run's keyframes (in their own odometry frame, unrelated to the
+  /// map's) follow. Throws std::logic_error after addKeyframe.
+  void loadMap(const std::vector<PoseGraphNode>& nodes, const std::vector<LoopEdge>& loops);
+  /// Ties the session to the map: every session node's corrected pose moved by the 4-DoF
+  /// transform map <- odometry (yaw about z, then translation); the session's first node is freed.
+  void relocalize(double yaw, const Eigen::Vector3d& t);
+  /// First node of the current session (0 without a loaded map).
+  std::size_t sessionStart() const { return session_start_; }
 
   /// Optimizes positions and yaws (deterministic: one thread, fixed iteration limit).
   PoseGraphSolve optimize();
 
   const std::vector<PoseGraphNode>& nodes() const { return nodes_; }
   const std::vector<LoopEdge>& loops() const { return loops_; }
+  /// A point of node i's odometry frame moved by node i's correction (landmarks it anchors).
+  Eigen::Vector3d correctedPoint(std::size_t i, const Eigen::Vector3d& p_odom) const;
   /// Corrected full pose of node i (its odometry roll and pitch, corrected yaw and position).
   void correctedPose(std::size_t i, Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const;
-  /// An odometry pose at t_ns moved by the correction of the newest node at or before t_ns (the
-  /// first node's for earlier times): yaw turned by the node's yaw change, position kept at the
-  /// same offset from the node (unchanged without nodes). Poses newer than the newest node get its
-  /// correction, as new keyframes do.
+  /// An odometry pose at t_ns moved by the correction of the current session's newest node at or
+  /// before t_ns (the session's first node's for earlier times): yaw turned by the node's yaw
+  /// change, position kept at the same offset from the node (unchanged without nodes). Poses newer
+  /// than the newest node get its correction, as new keyframes do.
   void correctedAt(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom,
                    Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const;
 
@@ -97,6 +110,7 @@ class PoseGraph {
   PoseGraphOptions options_;
   std::vector<PoseGraphNode> nodes_;
   std::vector<LoopEdge> loops_;
+  std::size_t session_start_ = 0;
 };
 
 }  // namespace idyvins::map

@@ -75,14 +75,15 @@ std::vector<std::vector<StampedPose>> segments(const Result& r) {
 
 void writeLoopsCsv(const std::string& path, const std::vector<map::LoopEvent>& loops) {
   std::ofstream f(path);
-  f << "# old_t_ns,new_t_ns,old_keyframe,new_keyframe,votes,matches,inliers,dx,dy,dz,dyaw_rad"
-       " (new keyframe in the old one's body frame, 4-DoF)\n";
+  f << "# old_t_ns,new_t_ns,old_keyframe,new_keyframe,votes,matches,inliers,dx,dy,dz,dyaw_rad,to_map"
+       " (new keyframe in the old one's body frame, 4-DoF; keyframes are pose-graph nodes; to_map 1: the old"
+       " keyframe is from the loaded map, its time on that map's clock)\n";
   char line[256];
   for (const auto& l : loops) {
-    std::snprintf(line, sizeof(line), "%lld,%lld,%u,%u,%d,%d,%d,%.6f,%.6f,%.6f,%.6f\n",
+    std::snprintf(line, sizeof(line), "%lld,%lld,%u,%u,%d,%d,%d,%.6f,%.6f,%.6f,%.6f,%d\n",
                   static_cast<long long>(l.old_t_ns), static_cast<long long>(l.new_t_ns), l.old_keyframe, l.new_keyframe,
                   l.votes, l.matches, l.inliers, l.relative.t_from_to.x(), l.relative.t_from_to.y(),
-                  l.relative.t_from_to.z(), l.relative.dyaw);
+                  l.relative.t_from_to.z(), l.relative.dyaw, l.to_map ? 1 : 0);
     f << line;
   }
   if (!f) throw InputError(path, "write failed");
@@ -98,7 +99,15 @@ nlohmann::json loopJson(const Result& r) {
           {"refused_by_consistency", st.refused_by_consistency},
           {"mean_detect_ms_per_keyframe", st.sum_detect_ms / k},
           {"graph_solves", st.graph_solves},
-          {"mean_graph_ms_per_solve", st.graph_solves ? st.sum_graph_ms / static_cast<double>(st.graph_solves) : 0.0}};
+          {"mean_graph_ms_per_solve", st.graph_solves ? st.sum_graph_ms / static_cast<double>(st.graph_solves) : 0.0},
+          {"static_map_points", r.loop_static_map.size()},
+          {"map", st.map_keyframes == 0
+                      ? nlohmann::json()
+                      : nlohmann::json{{"loaded_keyframes", st.map_keyframes},
+                                       {"relocalized", st.relocalized},
+                                       {"first_relocalization_t_ns", st.relocalized ? st.first_relocalization_t_ns : 0},
+                                       {"loops_to_map", st.map_loops},
+                                       {"unconfirmed_matches", st.relocalizations_unconfirmed}}}};
 }
 
 void writeResultFiles(const std::string& out, const Result& r) {
@@ -125,7 +134,10 @@ void writeResultFiles(const std::string& out, const Result& r) {
   atomically("state.csv", [&](const std::string& p) { io::writeStateCsv(p, states); });
   atomically("resets.csv", [&](const std::string& p) { writeResetsCsv(p, r.summary.resets); });
   if (!r.loop_enabled) return;
-  atomically("trajectory_loop.tum", [&](const std::string& p) { io::writeTum(p, r.loop_trajectory); });
+  // In a loaded map the corrected poses are map poses only once the run relocalized.
+  if (r.loop_stats.map_keyframes == 0 || r.loop_stats.relocalized)
+    atomically("trajectory_loop.tum", [&](const std::string& p) { io::writeTum(p, r.loop_trajectory); });
+  atomically("map_static_loop.ply", [&](const std::string& p) { io::writePly(p, plyPoints(r.loop_static_map)); });
   atomically("loops.csv", [&](const std::string& p) { writeLoopsCsv(p, r.loops); });
 }
 
@@ -179,7 +191,7 @@ void addAte(nlohmann::json& summary, const std::vector<StampedPose>& gt, const R
   } catch (const std::exception&) {  // no overlap with the ground truth: no ATE
     return;
   }
-  if (r.loop_enabled && r.loop_trajectory.size() > 2) {
+  if (r.loop_enabled && r.loop_trajectory.size() > 2 && (r.loop_stats.map_keyframes == 0 || r.loop_stats.relocalized)) {
     try {
       summary["loop_closure"]["ate_rmse_m"] =
           eval::computeAte(gt, r.loop_trajectory, eval::AlignMode::kSe3, 10'000'000).stats.rmse;

@@ -1,6 +1,7 @@
 #include "pipeline/system.h"
 
 #include <condition_variable>
+#include <cstdio>
 #include <functional>
 #include <mutex>
 #include <cmath>
@@ -108,6 +109,25 @@ System::System(const Config& config, const RunOptions& run)
 }
 
 System::~System() = default;
+
+std::string rigFingerprint(const Config& config) {
+  const camera::CameraParams& c = config.cams.at(0);
+  const Eigen::Isometry3d& T = config.T_b_c.at(0);
+  const Eigen::Quaterniond q(T.rotation());
+  char text[320];
+  std::snprintf(text, sizeof(text), "%s %dx%d f %.2f %.2f c %.2f %.2f d %.4f %.4f %.4f %.4f T_b_c0 %.3f %.3f %.3f q %.4f %.4f %.4f %.4f",
+                camera::toString(c.type), c.width, c.height, c.fx, c.fy, c.cx, c.cy, c.dist[0], c.dist[1], c.dist[2], c.dist[3],
+                T.translation().x(), T.translation().y(), T.translation().z(), q.w(), q.x(), q.y(), q.z());
+  return text;
+}
+
+void System::loadMap(const map::SavedMap& m, bool extend, const std::string& source) {
+  if (!loop_) throw std::logic_error("System::loadMap needs the config's loop_closure");
+  const std::string rig = rigFingerprint(config_);
+  if (!m.rig.empty() && m.rig != rig)
+    throw InputError(source, "map built with another left camera (" + m.rig + ") than the config's (" + rig + ")");
+  loop_->loadMap(m, extend);
+}
 
 void System::addImu(const ImuSample& sample) {
   if (!imu_.empty() && sample.t_ns <= imu_.back().t_ns) {  // as the estimator: strictly increasing
@@ -264,6 +284,7 @@ void System::finishLoops(Result& result) {
   }
   result.loops = loop_->loops();
   result.loop_stats = loop_->stats();
+  for (const auto& [id, p_w] : loop_->correctedLandmarks()) result.loop_static_map.push_back({p_w, FeatureLabel::kStatic, id});
 }
 
 void System::mapLostMoving(const frontend::FeatureFrame& ff, FrameOutput& out) {

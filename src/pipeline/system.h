@@ -105,6 +105,8 @@ struct Result {
   std::vector<StampedPose> loop_trajectory;
   std::vector<map::LoopEvent> loops;
   map::LoopStats loop_stats;
+  /// The static map re-anchored to the corrected poses (map::LoopCloser::correctedLandmarks).
+  std::vector<backend::MapPoint> loop_static_map;
 };
 
 /// How System runs the two halves of a frame (DESIGN §4.10). The data flow is fixed, so
@@ -169,6 +171,11 @@ class System {
   const Summary& summary() const { return summary_; }
   /// The loop closer (null unless the config's loop_closure); read it after finish().
   const map::LoopCloser* loopCloser() const { return loop_.get(); }
+  /// Starts in a saved map (before the first frame; needs the config's loop_closure): the run
+  /// relocalizes against it and keeps closing loops against it (map::LoopCloser::loadMap);
+  /// `extend` false: localization only. Throws InputError (naming `source`) when the map was
+  /// built with another left camera (model, size, intrinsics, extrinsics: rigFingerprint).
+  void loadMap(const map::SavedMap& map, bool extend, const std::string& source = "map");
 
  private:
   class Worker;
@@ -217,6 +224,10 @@ class System {
   /// Left images of the frames that may still leave the window as keyframes (time on the IMU clock).
   std::deque<std::pair<TimeNs, cv::Mat>> window_images_;
 };
+
+/// The left camera a saved map's descriptors and landmarks belong to (model, size, intrinsics,
+/// body-camera extrinsics, rounded): maps are refused by a rig with another fingerprint.
+std::string rigFingerprint(const Config& config);
 
 /// Pose of a stamped state (for trajectory writers and ATE).
 StampedPose toStampedPose(const StampedState& s);
