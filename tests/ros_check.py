@@ -2,9 +2,10 @@
 """idyvins_ros with a real roscore (CTest): a VIODE-style bag played by `rosbag play` into the
 node, its outputs recorded by `rosbag record`, compared with `idyvins run` on the same bag.
 
-ros_check.py run IDYVINS NODE WORK   one node per thread mode beside one bag play: every frame
-                                     processed, result files byte-identical to the offline run's,
-                                     odometry equal to its trajectory, clouds and image typed
+ros_check.py run IDYVINS NODE WORK   one node per thread mode beside one bag play (the second with
+                                     loop closure on): every frame processed, result files
+                                     byte-identical to the offline run's, odometry equal to its
+                                     trajectory, clouds and image typed, loop topics published
 ros_check.py bad IDYVINS NODE WORK   a node without a config, with a missing one, in a seg mode:
                                      exit 1 and one clear line
 
@@ -23,7 +24,8 @@ import time
 failures = []
 FRAMES = 81  # a 4 s sequence at 20 Hz
 TOPICS = ["/idyvins1/odometry", "/idyvins1/path", "/idyvins1/map_static", "/idyvins1/map_dynamic",
-          "/idyvins1/feature_image", "/idyvins1/timing", "/tf"]
+          "/idyvins1/feature_image", "/idyvins1/timing", "/tf", "/idyvins2/odometry_loop", "/idyvins2/path_loop",
+          "/idyvins2/map_static_loop"]
 
 
 def check(cond, what):
@@ -112,11 +114,20 @@ def subscribed(topics, node):
     return all(any(n.startswith(node) for n in by_topic.get(t, [])) for t in topics)
 
 
+def loop_config(cfg):
+    """The config with loop_closure: 1, beside it."""
+    path = os.path.join(os.path.dirname(cfg), "loop.yaml")
+    open(path, "w").write(open(cfg).read().replace("loop_closure: 0", "loop_closure: 1"))
+    return path
+
+
 def play_into_nodes(ros, bag, cfg, work):
-    """Two nodes (threads 1 and 2), rosbag record on the first; returns the nodes' exit codes."""
+    """Two nodes (threads 1 and 2, the second closing loops), rosbag record on the first and the
+    second's loop topics; returns the nodes' exit codes."""
     nodes = {}
     for th in (1, 2):
-        nodes[th] = ros.start([NODE, "__name:=idyvins%d" % th, "_config_file:=" + cfg, "_mode:=idy",
+        nodes[th] = ros.start([NODE, "__name:=idyvins%d" % th, "_config_file:=" + (cfg if th == 1 else loop_config(cfg)),
+                               "_mode:=idy",
                                "_threads:=%d" % th, "_body_frame:=body%d" % th, "_out:=" + os.path.join(work, "node%d" % th)],
                                "node%d.log" % th)
     rec = ros.start(["rosbag", "record", "-O", os.path.join(work, "recorded.bag")] + TOPICS, "record.log")
@@ -141,7 +152,8 @@ def play_into_nodes(ros, bag, cfg, work):
 
 def compare_files(work, th):
     out, ref = os.path.join(work, "node%d" % th), os.path.join(work, "offline%d" % th)
-    for f in ["trajectory.tum", "trajectory.csv", "state.csv", "map_static.ply", "map_dynamic.ply", "map_all.ply"]:
+    loop = ["trajectory_loop.tum", "loops.csv", "map_static_loop.ply"] if th == 2 else []
+    for f in ["trajectory.tum", "trajectory.csv", "state.csv", "map_static.ply", "map_dynamic.ply", "map_all.ply"] + loop:
         same = os.path.exists(os.path.join(out, f)) and open(os.path.join(out, f), "rb").read() == \
             open(os.path.join(ref, f), "rb").read()
         check(same, "threads %d: %s byte-identical to `idyvins run --threads %d`'s" % (th, f, th))
@@ -189,12 +201,30 @@ def check_recorded(work):
           "timing: one Float64MultiArray per frame (%d)" % len(timing))
     tf = [t for m in msgs.get("/tf", []) for t in m.transforms if t.child_frame_id == "body1"]
     check(len(tf) == len(ref), "TF world -> body1: one per pose (%d)" % len(tf))
+    # Loop closure (node 2): 4 s close no loop, so the live loop odometry is the odometry; the last
+    # path_loop is the final pose graph's trajectory (trajectory_loop.tum).
+    ref2 = tum_rows(os.path.join(work, "offline2", "trajectory.tum"))
+    ref2_loop = tum_rows(os.path.join(work, "offline2", "trajectory_loop.tum"))
+    odom = msgs.get("/idyvins2/odometry_loop", [])
+    worst = max([abs(a - b) for m, r in zip(odom, ref2) for a, b in zip(
+        [m.header.stamp.to_sec(), m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z],
+        r[:4])], default=1.0)
+    check(len(odom) == len(ref2) and odom[0]._type == "nav_msgs/Odometry" and worst < 1e-6,
+          "odometry_loop: %d messages for %d poses, largest difference to the odometry %.1e (no loop)" %
+          (len(odom), len(ref2), worst))
+    path = msgs.get("/idyvins2/path_loop", [])
+    check(bool(path) and path[-1]._type == "nav_msgs/Path" and len(path[-1].poses) == len(ref2_loop),
+          "path_loop: the last is trajectory_loop.tum (%d poses)" % (len(path[-1].poses) if path else 0))
+    cloud = msgs.get("/idyvins2/map_static_loop", [])
+    check(bool(cloud) and cloud[-1]._type == "sensor_msgs/PointCloud2" and cloud[-1].width > 0,
+          "map_static_loop: PointCloud2 (%d points)" % (cloud[-1].width if cloud else 0))
 
 
 def test_run(idy, work):
     bag, cfg = simulate(idy, work)
     for th in (1, 2):
-        r = subprocess.run([idy, "run", "-c", cfg, "-d", bag, "-o", os.path.join(work, "offline%d" % th), "--mode",
+        r = subprocess.run([idy, "run", "-c", cfg if th == 1 else loop_config(cfg), "-d", bag, "-o",
+                            os.path.join(work, "offline%d" % th), "--mode",
                             "idy", "--threads", str(th)], capture_output=True, text=True)
         check(r.returncode == 0, "idyvins run --threads %d on the bag" % th)
     with RosEnv(work) as ros:

@@ -4,13 +4,20 @@
 
 #include <exception>
 
+#include "map/map_io.h"
+
 namespace idyvins::ros_node {
 
 Driver::Driver(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Config& config, const DriverOptions& options)
     : config_(config),
       options_(options),
       system_(config, options.threads == 2 ? pipeline::RunOptions::twoThreads() : pipeline::RunOptions{}),
-      publisher_(pnh, options.publish, [this](TimeNs t) { return arrival(t); }) {
+      publisher_(pnh, options.publish, [this](TimeNs t) { return arrival(t); },
+                 config.loop.enabled ? LoopCorrection([this](const imu::NavState& s, Eigen::Vector3d& p,
+                                                             Eigen::Quaterniond& q) { return system_.loopCorrected(s, p, q); })
+                                     : LoopCorrection()) {
+  if (!options.load_map.empty())
+    system_.loadMap(map::loadMap(options.load_map), !options.localization_only, options.load_map);
   system_.addObserver(publisher_);
   worker_ = std::thread([this] { process(); });
   // Large queues: the callbacks only queue, so nothing is dropped by roscpp while the

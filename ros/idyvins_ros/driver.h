@@ -28,6 +28,8 @@ struct DriverOptions {
   int threads = 1;         ///< 1: sequential (lowest latency); 2: pipelined, as `idyvins run`'s default
   int queue_frames = 0;    ///< frames waiting for the system beyond which the oldest is dropped (0: never drop)
   PublisherOptions publish;
+  std::string load_map;            ///< a map saved by `idyvins run --save-map` to relocalize in (loop closure on)
+  bool localization_only = false;  ///< with load_map: do not extend the map
 };
 
 /// Counters of what did not reach the system.

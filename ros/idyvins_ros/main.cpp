@@ -42,6 +42,10 @@ NodeArgs readParams(ros::NodeHandle& pnh, int argc, char** argv) {
   pnh.param<std::string>("world_frame", a.driver.publish.world_frame, "world");
   pnh.param<std::string>("body_frame", a.driver.publish.body_frame, "body");
   pnh.param("map_every_frames", a.driver.publish.map_every_frames, 10);
+  pnh.param<std::string>("load_map", a.driver.load_map, "");
+  pnh.param("localization_only", a.driver.localization_only, false);
+  if (a.driver.localization_only && a.driver.load_map.empty())
+    throw idyvins::InputError("idyvins_ros", "~localization_only needs ~load_map");
   if (a.config_file.empty()) throw idyvins::InputError("idyvins_ros", "no config: set ~config_file or pass its path");
   if (a.driver.threads != 1 && a.driver.threads != 2)
     throw idyvins::InputError("idyvins_ros", "~threads must be 1 or 2, got " + std::to_string(a.driver.threads));
@@ -51,6 +55,7 @@ NodeArgs readParams(ros::NodeHandle& pnh, int argc, char** argv) {
 
 idyvins::Config nodeConfig(const NodeArgs& a) {
   idyvins::Config config = idyvins::loadConfig(a.config_file);
+  if (!a.driver.load_map.empty()) config.loop.enabled = true;  // the map is the loop closer's database
   if (!a.mode.empty() && !idyvins::parseMode(a.mode, config.mode))
     throw idyvins::InputError("idyvins_ros", "~mode: expected " + idyvins::modeNames() + ", got '" + a.mode + "'");
   if (idyvins::pipeline::traitsOf(config.mode).needs_masks)

@@ -44,8 +44,15 @@ sensor_msgs::PointCloud2 cloud(const std::vector<backend::MapPoint>& points, con
 
 }  // namespace
 
-Publisher::Publisher(ros::NodeHandle& nh, const PublisherOptions& options, std::function<SteadyTime(TimeNs)> arrival)
-    : options_(options), arrival_(std::move(arrival)) {
+Publisher::Publisher(ros::NodeHandle& nh, const PublisherOptions& options, std::function<SteadyTime(TimeNs)> arrival,
+                     LoopCorrection loop_correction)
+    : options_(options), arrival_(std::move(arrival)), loop_correction_(std::move(loop_correction)) {
+  if (loop_correction_) {
+    odometry_loop_ = nh.advertise<nav_msgs::Odometry>("odometry_loop", 100);
+    path_loop_ = nh.advertise<nav_msgs::Path>("path_loop", 10);
+    map_static_loop_ = nh.advertise<sensor_msgs::PointCloud2>("map_static_loop", 2, /*latch=*/true);
+    path_loop_msg_.header.frame_id = options_.world_frame;
+  }
   odometry_ = nh.advertise<nav_msgs::Odometry>("odometry", 100);
   path_ = nh.advertise<nav_msgs::Path>("path", 10);
   map_static_ = nh.advertise<sensor_msgs::PointCloud2>("map_static", 2, /*latch=*/true);
@@ -58,6 +65,10 @@ Publisher::Publisher(ros::NodeHandle& nh, const PublisherOptions& options, std::
 void Publisher::onFrame(const StereoFrame& input, const pipeline::FrameOutput& out) {
   const ros::Time stamp = rosTime(out.t_ns);
   if (out.estimate.initialized) publishPose(stamp, out.estimate.state);
+  Eigen::Vector3d p_loop;
+  Eigen::Quaterniond q_loop;
+  if (out.estimate.initialized && loop_correction_ && loop_correction_(out.estimate.state, p_loop, q_loop))
+    publishLoopPose(stamp, p_loop, q_loop);
   const double latency_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - arrival_(input.t_ns)).count();
   latencies_.push_back({input.t_ns, latency_ms});
@@ -106,6 +117,27 @@ void Publisher::publishPose(const ros::Time& stamp, const imu::NavState& s) {
   tf_.sendTransform(tf);
 }
 
+void Publisher::publishLoopPose(const ros::Time& stamp, const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
+  geometry_msgs::PoseStamped pose;
+  pose.header.stamp = stamp;
+  pose.header.frame_id = options_.world_frame;
+  pose.pose.position.x = p.x();
+  pose.pose.position.y = p.y();
+  pose.pose.position.z = p.z();
+  pose.pose.orientation.w = q.w();
+  pose.pose.orientation.x = q.x();
+  pose.pose.orientation.y = q.y();
+  pose.pose.orientation.z = q.z();
+  nav_msgs::Odometry odom;
+  odom.header = pose.header;
+  odom.child_frame_id = options_.body_frame;
+  odom.pose.pose = pose.pose;
+  odometry_loop_.publish(odom);
+  path_loop_msg_.header.stamp = stamp;
+  path_loop_msg_.poses.push_back(pose);
+  path_loop_.publish(path_loop_msg_);
+}
+
 void Publisher::publishImage(const StereoFrame& input, const pipeline::FrameOutput& out, const ros::Time& stamp) {
   const cv::Mat drawn = frontend::drawTracks(input.left, out.features);  // BGR, colours by label
   sensor_msgs::Image img;
@@ -147,6 +179,25 @@ void Publisher::publishFinalMaps(const pipeline::Result& result) {
   static_map_ = result.static_map;
   dynamic_map_ = result.dynamic_map;
   publishMaps(stamp);
+  if (!loop_correction_ || !result.loop_enabled) return;
+  map_static_loop_.publish(cloud(result.loop_static_map, options_.world_frame, stamp));
+  if (result.loop_stats.map_keyframes > 0 && !result.loop_stats.relocalized) return;  // no map frame
+  path_loop_msg_.poses.clear();
+  for (const StampedPose& s : result.loop_trajectory) {
+    geometry_msgs::PoseStamped pose;
+    pose.header.stamp = rosTime(s.t_ns);
+    pose.header.frame_id = options_.world_frame;
+    pose.pose.position.x = s.p_w_b.x();
+    pose.pose.position.y = s.p_w_b.y();
+    pose.pose.position.z = s.p_w_b.z();
+    pose.pose.orientation.w = s.q_w_b.w();
+    pose.pose.orientation.x = s.q_w_b.x();
+    pose.pose.orientation.y = s.q_w_b.y();
+    pose.pose.orientation.z = s.q_w_b.z();
+    path_loop_msg_.poses.push_back(pose);
+  }
+  path_loop_msg_.header.stamp = stamp;
+  path_loop_.publish(path_loop_msg_);
 }
 
 }  // namespace idyvins::ros_node

@@ -24,6 +24,9 @@ struct PublisherOptions {
   int map_every_frames = 10;  ///< the map clouds are published every this many frames (and at the end)
 };
 
+/// The loop closer's live correction of an odometry pose (pipeline::System::loopCorrected).
+using LoopCorrection = std::function<bool(const imu::NavState&, Eigen::Vector3d&, Eigen::Quaterniond&)>;
+
 /// Per-frame latency: from the arrival of the frame's second image to its odometry.
 struct LatencyRecord {
   TimeNs t_ns = 0;
@@ -33,22 +36,29 @@ struct LatencyRecord {
 class Publisher final : public pipeline::FrameObserver {
  public:
   /// `arrival(t_ns)` gives when the frame with image stamp t_ns arrived (steady clock).
-  Publisher(ros::NodeHandle& nh, const PublisherOptions& options, std::function<SteadyTime(TimeNs)> arrival);
+  /// `loop_correction` (loop closure on): also odometry_loop, path_loop and map_static_loop.
+  Publisher(ros::NodeHandle& nh, const PublisherOptions& options, std::function<SteadyTime(TimeNs)> arrival,
+            LoopCorrection loop_correction = {});
   void onFrame(const StereoFrame& input, const pipeline::FrameOutput& out) override;
-  /// The complete maps of finish() (latched topics).
+  /// The complete maps of finish() (latched topics); with loop closure, path_loop is replaced by
+  /// the final pose graph's trajectory and map_static_loop published.
   void publishFinalMaps(const pipeline::Result& result);
   const std::vector<LatencyRecord>& latencies() const { return latencies_; }
   std::size_t published() const { return frames_; }
 
  private:
   void publishPose(const ros::Time& stamp, const imu::NavState& s);
+  void publishLoopPose(const ros::Time& stamp, const Eigen::Vector3d& p, const Eigen::Quaterniond& q);
   void publishImage(const StereoFrame& input, const pipeline::FrameOutput& out, const ros::Time& stamp);
   void publishTiming(const ros::Time& stamp, const pipeline::FrameOutput& out, double latency_ms);
   void publishMaps(const ros::Time& stamp);
 
   PublisherOptions options_;
   std::function<SteadyTime(TimeNs)> arrival_;
+  LoopCorrection loop_correction_;
   ros::Publisher odometry_, path_, map_static_, map_dynamic_, image_, timing_;
+  ros::Publisher odometry_loop_, path_loop_, map_static_loop_;
+  nav_msgs::Path path_loop_msg_;
   tf2_ros::TransformBroadcaster tf_;
   nav_msgs::Path path_msg_;
   std::vector<backend::MapPoint> static_map_, dynamic_map_;

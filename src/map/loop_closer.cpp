@@ -49,6 +49,8 @@ void LoopCloser::loadMap(const SavedMap& map, bool extend) {
   loaded_ = map.keyframes.size();
   extend_ = extend;
   stats_.map_keyframes = loaded_;
+  std::lock_guard<std::mutex> lock(correction_mutex_);
+  correction_.in_map = false;
 }
 
 void LoopCloser::add(LoopKeyframe keyframe) {
@@ -142,6 +144,25 @@ void LoopCloser::handle(LoopKeyframe& in) {
     stats_.sum_graph_ms += msSince(t1);
     ++stats_.graph_solves;
   }
+  const PoseGraphNode& newest = graph_.nodes()[node];
+  std::lock_guard<std::mutex> lock(correction_mutex_);
+  correction_ = {loaded_ == 0 || stats_.relocalized, newest.p_odom, newest.p, wrapAngle(newest.yaw - yawOf(newest.q_odom))};
+}
+
+bool LoopCloser::correctNow(const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom, Eigen::Vector3d& p_w_b,
+                            Eigen::Quaterniond& q_w_b) const {
+  Correction c;
+  {
+    std::lock_guard<std::mutex> lock(correction_mutex_);
+    c = correction_;
+  }
+  p_w_b = p_odom;
+  q_w_b = q_odom;
+  if (loaded_ > 0 && !c.in_map) return false;
+  const Eigen::Matrix3d R = rotZ(c.dyaw);
+  p_w_b = R * (p_odom - c.p_odom) + c.p;
+  q_w_b = Eigen::Quaterniond(R * q_odom.toRotationMatrix()).normalized();
+  return true;
 }
 
 bool LoopCloser::tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint32_t new_node) {

@@ -85,6 +85,13 @@ class LoopCloser {
   /// Waits until every keyframe given has been handled (call before reading results).
   void finish();
 
+  /// Live use (any thread, while keyframes are handled): an odometry pose moved by the newest
+  /// correction the loop closer has finished (that of its newest pose-graph node). False, pose
+  /// unchanged, while a loaded map has not been relocalized in (the pose is in no map frame yet).
+  /// Offline results read the final graph instead (PoseGraph::correctedAt after finish()).
+  bool correctNow(const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom, Eigen::Vector3d& p_w_b,
+                  Eigen::Quaterniond& q_w_b) const;
+
   const std::vector<LoopEvent>& loops() const { return loops_; }
   const PoseGraph& graph() const { return graph_; }
   const KeyframeDatabase& database() const { return database_; }
@@ -127,6 +134,14 @@ class LoopCloser {
   bool have_last_ = false;  ///< the last keyframe taken (add(), caller's thread)
   Eigen::Vector3d last_p_ = Eigen::Vector3d::Zero();
   Eigen::Quaterniond last_q_ = Eigen::Quaterniond::Identity();
+  /// The newest node's correction, published after each keyframe for correctNow().
+  struct Correction {
+    bool in_map = true;
+    Eigen::Vector3d p_odom = Eigen::Vector3d::Zero(), p = Eigen::Vector3d::Zero();
+    double dyaw = 0;
+  };
+  mutable std::mutex correction_mutex_;
+  Correction correction_;
   std::mutex mutex_;
   std::condition_variable wake_, idle_;
   std::deque<LoopKeyframe> queue_;

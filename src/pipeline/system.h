@@ -171,6 +171,11 @@ class System {
   const Summary& summary() const { return summary_; }
   /// The loop closer (null unless the config's loop_closure); read it after finish().
   const map::LoopCloser* loopCloser() const { return loop_.get(); }
+  /// Live use: `state`'s pose moved by the loop closer's newest correction (map frame once
+  /// relocalized in a loaded map). False without loop closure or before that relocalization.
+  bool loopCorrected(const imu::NavState& state, Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const {
+    return loop_ && loop_->correctNow(state.p_w_b, state.q_w_b, p_w_b, q_w_b);
+  }
   /// Starts in a saved map (before the first frame; needs the config's loop_closure): the run
   /// relocalizes against it and keeps closing loops against it (map::LoopCloser::loadMap);
   /// `extend` false: localization only. Throws InputError (naming `source`) when the map was
