@@ -306,19 +306,21 @@ FaultCheck checkFault(const SceneRun& run, TimeNs shift_after = std::numeric_lim
 TEST(PipelineSystem, LoopClosureKeyframeDatabaseHoldsStaticLandmarksOnly) {
   // City with heavy traffic: keyframes leave the window seeing candidates and moving points too.
   std::vector<std::pair<TimeNs, std::uint64_t>> stored;
-  std::size_t database_keyframes = 0;
+  std::size_t database_keyframes = 0, kept_apart = 0;
   const SceneRun run = runScene(
       Mode::kIdy, 6.0, RunOptions::twoThreads(), {}, false, {}, [](Config& c) { c.loop.enabled = true; },
       [&](const System& system) {
         ASSERT_NE(system.loopCloser(), nullptr);
         // every keyframe that left the window was taken or skipped as too near the last one
         database_keyframes = system.loopCloser()->database().size() + system.loopCloser()->stats().keyframes_skipped;
+        kept_apart = system.loopCloser()->stats().candidates_kept_apart;
         for (const auto& kf : system.loopCloser()->database().keyframes())
           for (const auto& l : kf.landmarks) stored.emplace_back(kf.t_ns, l.id);
       });
   EXPECT_EQ(database_keyframes, run.keyframes_left);
   EXPECT_GT(run.left_not_static.size(), 0u) << "the test needs keyframes that saw non-static landmarks";
   EXPECT_GT(stored.size(), 100u);
+  EXPECT_GT(kept_apart, 0u) << "candidates reach the loop closer and stay out of its database";
   for (const auto& s : stored) {
     EXPECT_EQ(run.left_not_static.count(s), 0u) << "landmark " << s.second << " at " << s.first;
     EXPECT_EQ(run.left_static.count(s), 1u) << "landmark " << s.second << " at " << s.first;

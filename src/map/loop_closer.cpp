@@ -107,6 +107,17 @@ void LoopCloser::run() {
 void LoopCloser::handle(LoopKeyframe& in) {
   const auto t0 = std::chrono::steady_clock::now();
   // Corners: the landmarks' own, then extra ones for recognition.
+  // Candidates stay out of the database unless asked for (LoopOptions::use_candidates).
+  std::vector<LoopLandmark> used;
+  for (const LoopLandmark& l : in.landmarks) {
+    if (l.candidate && !options_.use_candidates) {
+      ++stats_.candidates_kept_apart;
+      continue;
+    }
+    ++stats_.landmarks;
+    used.push_back(l);
+  }
+  in.landmarks = std::move(used);
   std::vector<cv::Point2f> corners;
   for (const LoopLandmark& l : in.landmarks) corners.emplace_back(static_cast<float>(l.uv.x()), static_cast<float>(l.uv.y()));
   const std::size_t n_landmarks = corners.size();

@@ -25,11 +25,14 @@
 
 namespace idyvins::map {
 
-/// A static landmark observed by the keyframe (the caller passes static ones only).
+/// A landmark observed by the keyframe: static, or a dynamic candidate not yet cleared (the
+/// caller passes no eliminated or confirmed-dynamic one). Candidates are kept apart: counted,
+/// used only with LoopOptions::use_candidates.
 struct LoopLandmark {
   std::uint64_t id = 0;
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
   Eigen::Vector2d uv = Eigen::Vector2d::Zero(), xy = Eigen::Vector2d::Zero();
+  bool candidate = false;
 };
 
 /// One keyframe handed to the loop closer.
@@ -55,6 +58,7 @@ struct LoopStats {
   double sum_detect_ms = 0;  ///< descriptors, lookup, geometric check
   double sum_graph_ms = 0;   ///< pose-graph solves
   std::size_t graph_solves = 0;
+  std::size_t landmarks = 0, candidates_kept_apart = 0;  ///< handed over with the keyframes taken
   // With a loaded map (loadMap):
   std::size_t map_keyframes = 0;    ///< keyframes loaded
   std::size_t map_loops = 0;        ///< loops to the map's keyframes (relocalizations included)

@@ -48,6 +48,9 @@ struct LoopOptions {
   double max_loop_distance_m = 20.0;  ///< a loop's translation from the odometry guess beyond this is refused
   double max_loop_yaw_rad = 0.5;      ///< likewise its yaw
   double max_tilt_rad = 0.1;          ///< PnP's roll/pitch disagreeing with the odometry's by more: refused
+  /// Dynamic candidates not yet cleared join the keyframe's landmarks (PnP, descriptors, saved
+  /// maps). Off: they are kept apart (docs/loop-closure.md#candidates).
+  bool use_candidates = false;
   /// Relocalization in a loaded map: a match is confirmed by another within this many keyframes
   /// implying the same map <- odometry transform (within the two tolerances below).
   int relocalization_window = 3;
@@ -67,6 +70,8 @@ struct LoopOptions {
     v.param({"loop_min_inliers", "PnP inliers that make a loop", ParamRule::kPositive}, verify.min_inliers);
     v.param({"loop_extra_corners", "recognition corners per keyframe beside the landmarks'", ParamRule::kNonNegative},
             extra_corners);
+    v.param({"loop_use_candidates", "0/1, dynamic candidates not yet cleared join the loop closer's landmarks"},
+            use_candidates);
     v.param({"loop_keyframe_distance", "m, keyframes nearer than this to the last one taken are skipped (unless turned)",
              ParamRule::kNonNegative},
             min_keyframe_distance_m);

@@ -101,6 +101,8 @@ nlohmann::json loopJson(const Result& r) {
           {"graph_solves", st.graph_solves},
           {"mean_graph_ms_per_solve", st.graph_solves ? st.sum_graph_ms / static_cast<double>(st.graph_solves) : 0.0},
           {"static_map_points", r.loop_static_map.size()},
+          {"landmarks", st.landmarks},
+          {"candidates_kept_apart", st.candidates_kept_apart},
           {"map", st.map_keyframes == 0
                       ? nlohmann::json()
                       : nlohmann::json{{"loaded_keyframes", st.map_keyframes},

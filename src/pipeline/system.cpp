@@ -268,8 +268,11 @@ void System::feedLoopCloser(const InFlight& f) {
   k.p_w_b = kf->p_w_b;
   k.q_w_b = kf->q_w_b;
   k.left = window_images_.front().second;
-  for (const backend::KeyframeObservation& o : kf->observations)  // static landmarks only (DESIGN §7)
-    if (o.label == FeatureLabel::kStatic && o.has_position) k.landmarks.push_back({o.id, o.p_w, o.uv, o.xy});
+  // Static landmarks, and candidates for the loop closer to keep apart; never an eliminated or
+  // confirmed-dynamic one (DESIGN §7).
+  for (const backend::KeyframeObservation& o : kf->observations)
+    if ((o.label == FeatureLabel::kStatic || o.label == FeatureLabel::kCandidate) && o.has_position)
+      k.landmarks.push_back({o.id, o.p_w, o.uv, o.xy, o.label == FeatureLabel::kCandidate});
   loop_->add(std::move(k));
 }
 
