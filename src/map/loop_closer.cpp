@@ -76,9 +76,20 @@ void LoopCloser::add(LoopKeyframe keyframe) {
 }
 
 void LoopCloser::finish() {
-  if (!worker_.joinable()) return;
-  std::unique_lock<std::mutex> lock(mutex_);
-  idle_.wait(lock, [this] { return queue_.empty() && !busy_; });
+  if (worker_.joinable()) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    idle_.wait(lock, [this] { return queue_.empty() && !busy_; });
+  }
+  if (unsolved_loops_) solve(static_cast<std::uint32_t>(graph_.nodes().size() - 1));  // the worker is idle
+}
+
+void LoopCloser::solve(std::uint32_t newest) {
+  const auto t0 = std::chrono::steady_clock::now();
+  graph_.optimize();
+  stats_.sum_graph_ms += msSince(t0);
+  ++stats_.graph_solves;
+  unsolved_loops_ = false;
+  last_solve_node_ = newest;
 }
 
 void LoopCloser::run() {
@@ -145,16 +156,17 @@ void LoopCloser::handle(LoopKeyframe& in) {
   }
   // Node index = database id unless localizing only (then the database keeps the map alone).
   const auto node = static_cast<std::uint32_t>(graph_.addKeyframe(in.t_ns, in.p_w_b, in.q_w_b));
+  const bool relocalized_before = stats_.relocalized;
   const bool closed = tryLoop(kf, query, node);
   if (extend_) database_.add(std::move(kf));
   ++stats_.keyframes;
   stats_.sum_detect_ms += msSince(t0);
-  if (closed) {
-    const auto t1 = std::chrono::steady_clock::now();
-    graph_.optimize();
-    stats_.sum_graph_ms += msSince(t1);
-    ++stats_.graph_solves;
-  }
+  // Solve at the first loop and a relocalization at once, otherwise at most every
+  // graph_solve_interval keyframes while loops come (and at finish()): fixed points of the stream.
+  unsolved_loops_ |= closed;
+  if (unsolved_loops_ && (stats_.graph_solves == 0 || stats_.relocalized != relocalized_before ||
+                          node >= last_solve_node_ + static_cast<std::uint32_t>(options_.graph_solve_interval)))
+    solve(node);
   const PoseGraphNode& newest = graph_.nodes()[node];
   std::lock_guard<std::mutex> lock(correction_mutex_);
   correction_ = {loaded_ == 0 || stats_.relocalized, newest.p_odom, newest.p, wrapAngle(newest.yaw - yawOf(newest.q_odom))};

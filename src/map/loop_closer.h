@@ -111,6 +111,7 @@ class LoopCloser {
   void run();
   void handle(LoopKeyframe& keyframe);
   bool tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint32_t new_node);
+  void solve(std::uint32_t newest);  ///< optimizes the pose graph (newest: the node handled last)
   /// A verified match of the new node to a map keyframe (PnP pose p_w_b/q_w_b in the old
   /// keyframe's odometry frame): relocalizes once confirmed, else a loop checked against the
   /// current map pose. True when it became a loop edge.
@@ -125,6 +126,8 @@ class LoopCloser {
   std::vector<LoopEvent> loops_;
   LoopStats stats_;
   std::size_t loaded_ = 0;  ///< keyframes from a loaded map (database ids below it)
+  bool unsolved_loops_ = false;     ///< loop edges added since the last solve
+  std::uint32_t last_solve_node_ = 0;
   bool extend_ = true;
   bool added_ = false;
   /// An unconfirmed relocalization: the map <- odometry transform one keyframe's match implied.

@@ -48,6 +48,10 @@ struct LoopOptions {
   double max_loop_distance_m = 20.0;  ///< a loop's translation from the odometry guess beyond this is refused
   double max_loop_yaw_rad = 0.5;      ///< likewise its yaw
   double max_tilt_rad = 0.1;          ///< PnP's roll/pitch disagreeing with the odometry's by more: refused
+  /// The pose graph is solved at the first loop and at a relocalization at once, then at most
+  /// every this many keyframes while loops come, and at the end (VINS-Fusion solves whenever
+  /// its thread is free; here the points are fixed in the keyframe stream: deterministic).
+  int graph_solve_interval = 10;
   /// Dynamic candidates not yet cleared join the keyframe's landmarks (PnP, descriptors, saved
   /// maps). Off: they are kept apart (docs/loop-closure.md#candidates).
   bool use_candidates = false;
