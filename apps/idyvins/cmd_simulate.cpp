@@ -126,6 +126,23 @@ int runSimulate(const SimulateArgs& a) {
   return kOk;
 }
 
+/// --traffic-seed, --parked, --route: the run through a place (loop closure, map reuse).
+void addRunThroughPlaceOptions(CLI::App* cmd, SimulateArgs& args) {
+  SimulateArgs* a = &args;
+  cmd->add_option("--traffic-seed", a->traffic_seed,
+                  "random seed of the run through the place: traffic, temporarily parked cars, the\n"
+                  "trajectory's start and phases, sensor noise (default: --seed). Same --seed, other\n"
+                  "--traffic-seed: the same place revisited with other vehicles");
+  cmd->add_option("--parked", a->parked,
+                  "temporarily parked cars placed from the traffic seed (garage centre, back street of\n"
+                  "the city block; static within the run, moved or gone in another run)")
+      ->check(CLI::Range(0, 24));
+  cmd->add_option("--route", a->route,
+                  "default: the scene's path (city: along the street; parking_lot: laps of the\n"
+                  "ellipse, 33 s each); block: laps around a city block (about 95 s each, 4 m up)")
+      ->check(CLI::IsMember({"default", "block"}));
+}
+
 }  // namespace
 
 void registerSimulate(CLI::App& app, int& exit_code) {
@@ -140,18 +157,7 @@ void registerSimulate(CLI::App& app, int& exit_code) {
   cmd->add_option("--level", a->level, "moving objects: none | low | mid | high")
       ->check(CLI::IsMember({"none", "low", "mid", "high"}));
   cmd->add_option("--seed", a->seed, "random seed of the place (layout, textures) and, unless --traffic-seed, of the run");
-  cmd->add_option("--traffic-seed", a->traffic_seed,
-                  "random seed of the run through the place: traffic, temporarily parked cars, the\n"
-                  "trajectory's start and phases, sensor noise (default: --seed). Same --seed, other\n"
-                  "--traffic-seed: the same place revisited with other vehicles");
-  cmd->add_option("--parked", a->parked,
-                  "temporarily parked cars placed from the traffic seed (garage centre, back street of\n"
-                  "the city block; static within the run, moved or gone in another run)")
-      ->check(CLI::Range(0, 24));
-  cmd->add_option("--route", a->route,
-                  "default: the scene's path (city: along the street; parking_lot: laps of the\n"
-                  "ellipse, 33 s each); block: laps around a city block (about 95 s each, 4 m up)")
-      ->check(CLI::IsMember({"default", "block"}));
+  addRunThroughPlaceOptions(cmd, *a);
   cmd->add_option("--duration", a->duration, "seconds of data");
   cmd->add_option("-o,--out", a->out, "output folder (with --standard-set: the parent folder)")->required();
   cmd->add_option("--noise", a->noise, "IMU noise scale (0 = perfect IMU, 1 = ADIS16448-like)");
