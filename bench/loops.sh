@@ -6,6 +6,8 @@
 # other traffic and temporarily parked cars moved (--traffic-seed 11 / 12, --parked 6); runs each
 # looping sequence in baseline and idy with loop_closure 1; builds a map from traffic seed 11 in
 # each mode (--save-map) and localizes traffic seed 12 in it (--load-map --localization-only);
+# and, to validate the loop parameters on data no default is tuned on, 120 s of garage laps of the
+# validation family (handheld, EuRoC's intrinsics; none and high traffic) in idy;
 # then bench/loops_eval.py writes OUT_DIR/loops.md and OUT_DIR/loops.json. Finished parts are kept
 # (delete a folder to redo it). Hours on 2 cores: the renders take about real time, the runs 1-4x.
 set -euo pipefail
@@ -34,11 +36,15 @@ for s in 1 2 3; do for l in none high; do
   render block_${l}_s$s --scene city --route block --level $l --seed $s --duration 180
   seqs+=(garage_${l}_s$s block_${l}_s$s)
 done; done
+for l in none high; do  # the validation family (handheld, EuRoC's intrinsics): no default is tuned on it
+  render validation_garage_${l}_s1 --family validation --scene parking_lot --level $l --seed 1 --duration 120
+done
 for t in 11 12; do
   render reuse_garage_t$t --scene parking_lot --level high --seed 1 --traffic-seed $t --parked 6 --duration 120
   render reuse_block_t$t --scene city --route block --level high --seed 1 --traffic-seed $t --parked 6 --duration 120
 done
 for seq in "${seqs[@]}"; do for mode in idy baseline; do run "$seq" $mode "$O/${seq}_$mode"; done; done
+for l in none high; do run validation_garage_${l}_s1 idy "$O/validation_garage_${l}_s1_idy"; done
 for place in garage block; do for mode in baseline idy; do
   run reuse_${place}_t11 $mode "$O/reuse_${place}_map_$mode" --save-map "$O/reuse_${place}_map_$mode.map"
   run reuse_${place}_t12 $mode "$O/reuse_${place}_loc_$mode" --load-map "$O/reuse_${place}_map_$mode.map" --localization-only

@@ -93,29 +93,28 @@ def summary(out):
 
 def looping(data, out_dir):
     rows = []
-    for place in ("garage", "block"):
-        for level in ("none", "high"):
-            for seed in (1, 2, 3):
-                seq = "%s_%s_s%d" % (place, level, seed)
-                for mode in ("baseline", "idy"):
-                    out = os.path.join(out_dir, "%s_%s" % (seq, mode))
-                    if not os.path.exists(os.path.join(out, "stats.json")):
-                        rows.append({"sequence": seq, "mode": mode, "missing": True})
-                        continue
-                    s = summary(out)
-                    lc = s["loop_closure"]
-                    errors = loop_errors(os.path.join(data, seq), os.path.join(out, "loops.csv"))
-                    frame_ms = s["mean_tracking_ms"] + s["mean_optimization_ms"] + s["mean_marginalization_ms"] + \
-                        s["mean_filter_ms"]
-                    rows.append({"sequence": seq, "mode": mode, "ate_m": s.get("ate_rmse_m"),
-                                 "loop_ate_m": lc.get("ate_rmse_m"), "loops": lc["loops"],
-                                 "false_loops": false_loops(errors),
-                                 "worst_loop_m": max((e[0] for e in errors), default=0.0),
-                                 "worst_loop_deg": math.degrees(max((e[1] for e in errors), default=0.0)),
-                                 "keyframes": lc["keyframes"], "detect_ms_per_keyframe": lc["mean_detect_ms_per_keyframe"],
-                                 "graph_ms_per_solve": lc["mean_graph_ms_per_solve"], "graph_solves": lc["graph_solves"],
-                                 "frame_ms": frame_ms, "realtime_factor": s["realtime_factor"],
-                                 "resets": len(s["resets"])})
+    runs = [("%s_%s_s%d" % (place, level, seed), mode) for place in ("garage", "block") for level in ("none", "high")
+            for seed in (1, 2, 3) for mode in ("baseline", "idy")]
+    runs += [("validation_garage_%s_s1" % level, "idy") for level in ("none", "high")]
+    for seq, mode in runs:
+        out = os.path.join(out_dir, "%s_%s" % (seq, mode))
+        if not os.path.exists(os.path.join(out, "stats.json")):
+            rows.append({"sequence": seq, "mode": mode, "missing": True})
+            continue
+        s = summary(out)
+        lc = s["loop_closure"]
+        errors = loop_errors(os.path.join(data, seq), os.path.join(out, "loops.csv"))
+        frame_ms = s["mean_tracking_ms"] + s["mean_optimization_ms"] + s["mean_marginalization_ms"] + \
+            s["mean_filter_ms"]
+        rows.append({"sequence": seq, "mode": mode, "ate_m": s.get("ate_rmse_m"),
+                     "loop_ate_m": lc.get("ate_rmse_m"), "loops": lc["loops"],
+                     "false_loops": false_loops(errors),
+                     "worst_loop_m": max((e[0] for e in errors), default=0.0),
+                     "worst_loop_deg": math.degrees(max((e[1] for e in errors), default=0.0)),
+                     "keyframes": lc["keyframes"], "detect_ms_per_keyframe": lc["mean_detect_ms_per_keyframe"],
+                     "graph_ms_per_solve": lc["mean_graph_ms_per_solve"], "graph_solves": lc["graph_solves"],
+                     "frame_ms": frame_ms, "realtime_factor": s["realtime_factor"],
+                     "resets": len(s["resets"])})
     return rows
 
 
@@ -170,20 +169,37 @@ def fmt(v, f="%.3f"):
     return "—" if v is None else f % v
 
 
+def summary_table(loop_rows):
+    """Per place, traffic and mode: runs, loop/odometry ATE ratio (worst and mean), false loops."""
+    out = ["| sequences | mode | runs | loop / odometry ATE, worst (mean) | false loops |", "|---|---|---|---|---|"]
+    groups = {}
+    for r in loop_rows:
+        if r.get("missing") or r["ate_m"] is None or r["loop_ate_m"] is None:
+            continue
+        key = (r["sequence"].rsplit("_s", 1)[0], r["mode"])
+        groups.setdefault(key, []).append(r)
+    for (seq, mode), rows in sorted(groups.items()):
+        ratios = [r["loop_ate_m"] / r["ate_m"] for r in rows]
+        out.append("| %s | %s | %d | %.2f (%.2f) | %d |" % (seq, mode, len(rows), max(ratios),
+                                                           sum(ratios) / len(ratios), sum(r["false_loops"] for r in rows)))
+    return out
+
+
 def markdown(loop_rows, reuse_rows):
-    out = ["## Looping sequences (3 min; loop closure on)", "",
+    out = ["## Looping sequences (3 min; loop closure on)", ""] + summary_table(loop_rows) + ["",
            "| sequence | mode | odometry ATE (m) | loop ATE (m) | loop / odometry | loops | false loops | worst loop "
-           "(m, °) | keyframes | detect ms/kf | graph ms/solve | resets |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+           "(m, °) | keyframes | detect ms/kf | graph solves, ms each | graph ms/kf | resets |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in loop_rows:
         if r.get("missing"):
-            out.append("| %s | %s | not run |||||||||| |" % (r["sequence"], r["mode"]))
+            out.append("| %s | %s | not run ||||||||||| |" % (r["sequence"], r["mode"]))
             continue
         ratio = r["loop_ate_m"] / r["ate_m"] if r["ate_m"] and r["loop_ate_m"] is not None else None
-        out.append("| %s | %s | %s | %s | %s | %d | %d | %.3f, %.2f | %d | %.1f | %.1f | %d |" % (
+        out.append("| %s | %s | %s | %s | %s | %d | %d | %.3f, %.2f | %d | %.0f | %d, %.0f | %.0f | %d |" % (
             r["sequence"], r["mode"], fmt(r["ate_m"]), fmt(r["loop_ate_m"]), fmt(ratio, "%.2f"), r["loops"],
             r["false_loops"], r["worst_loop_m"], r["worst_loop_deg"], r["keyframes"], r["detect_ms_per_keyframe"],
-            r["graph_ms_per_solve"], r["resets"]))
+            r["graph_solves"], r["graph_ms_per_solve"],
+            r["graph_ms_per_solve"] * r["graph_solves"] / max(1, r["keyframes"]), r["resets"]))
     out += ["", "## Map reuse under new traffic (map: traffic seed 11; localized: traffic seed 12, --localization-only)",
             "", "| place | map built by | map landmarks | on parked cars | first relocalization (s) | frames "
             "localized | relocalization RMSE (m) | max (m) | loops to map | wrong relocalizations | unconfirmed "

@@ -102,7 +102,7 @@ std::size_t drive(io::DataSource& source, pipeline::System& system, std::size_t 
 }
 
 /// The loop-closure lines of the run's summary (nothing when it was off).
-void printLoops(const nlohmann::json& l) {
+void printLoops(const nlohmann::json& l, TimeNs first_t_ns) {
   if (l.is_null()) return;
   std::printf("loop closure: %zu keyframes (%zu skipped, too near the last), %zu loops closed; %.1f ms per keyframe, "
               "%.1f ms per pose-graph solve",
@@ -112,8 +112,9 @@ void printLoops(const nlohmann::json& l) {
   std::printf("\n");
   if (const auto& m = l["map"]; !m.is_null()) {
     if (m["relocalized"].get<bool>())
-      std::printf("map: %zu keyframes loaded; relocalized at t = %lld ns, %zu loops to the map\n",
-                  m["loaded_keyframes"].get<std::size_t>(), m["first_relocalization_t_ns"].get<long long>(),
+      std::printf("map: %zu keyframes loaded; relocalized %.1f s after the first frame, %zu loops to the map\n",
+                  m["loaded_keyframes"].get<std::size_t>(),
+                  1e-9 * static_cast<double>(m["first_relocalization_t_ns"].get<TimeNs>() - first_t_ns),
                   m["loops_to_map"].get<std::size_t>());
     else
       std::fprintf(stderr, "warning: %zu map keyframes loaded, never relocalized in the map (%zu unconfirmed "
@@ -169,7 +170,7 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
                     1e-9 * (g["from_t_ns"].get<double>() - s["first_t_ns"].get<double>()),
                     1e-9 * (g["to_t_ns"].get<double>() - s["first_t_ns"].get<double>()), g["poses"].get<std::size_t>(),
                     g["ate_rmse_m"].get<double>());
-  printLoops(s["loop_closure"]);
+  printLoops(s["loop_closure"], s["first_t_ns"].get<TimeNs>());
   std::printf("map: %zu static points, %zu dynamic points\n", s["map_static_points"].get<std::size_t>(),
               s["map_dynamic_points"].get<std::size_t>());
   if (const auto& c = s["classification"]; !c.is_null())
