@@ -205,7 +205,7 @@ bool LoopCloser::tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint
     }
     const RelativePose4 rel = relativePose4(old.p_w_b, old.q_w_b, v.p_w_b, v.q_w_b);
     if (c.keyframe < map_ids) {
-      if (mapMatch(now, c.keyframe, new_node, rel, c, v.matches, v.inliers)) return true;
+      if (mapMatch(now, c.keyframe, new_node, rel, c, v)) return true;
       continue;
     }
     // Within the run: against the odometry's own guess, a wild jump is no loop.
@@ -216,7 +216,8 @@ bool LoopCloser::tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint
       continue;
     }
     graph_.addLoop({c.keyframe, new_node, rel});
-    loops_.push_back({c.keyframe, new_node, old.t_ns, now.t_ns, c.votes, v.matches, v.inliers, rel, false});
+    loops_.push_back({c.keyframe, new_node, old.t_ns, now.t_ns, c.votes, v.matches, v.inliers, v.sigma_position_m, rel,
+                      false});
     ++stats_.loops;
     return true;
   }
@@ -224,7 +225,7 @@ bool LoopCloser::tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint
 }
 
 bool LoopCloser::mapMatch(const Keyframe& now, std::uint32_t old_id, std::uint32_t new_node, const RelativePose4& rel,
-                          const PlaceCandidate& c, int matches, int inliers) {
+                          const PlaceCandidate& c, const PlaceVerification& v) {
   // Where the match puts the new keyframe in the map: the old keyframe's map pose, then `rel`.
   Eigen::Vector3d p_old, p_now;
   Eigen::Quaterniond q_old, q_now;
@@ -232,8 +233,8 @@ bool LoopCloser::mapMatch(const Keyframe& now, std::uint32_t old_id, std::uint32
   graph_.correctedPose(new_node, p_now, q_now);
   const Eigen::Vector3d p_map = p_old + q_old * rel.t_from_to;
   const double yaw_map = wrapAngle(yawOf(q_old) + rel.dyaw);
-  const LoopEvent event{old_id, new_node, database_.keyframe(old_id).t_ns, now.t_ns, c.votes, matches, inliers, rel,
-                        true};
+  const LoopEvent event{old_id,    new_node,  database_.keyframe(old_id).t_ns, now.t_ns, c.votes, v.matches,
+                        v.inliers, v.sigma_position_m, rel, true};
   if (stats_.relocalized) {  // tied to the map already: against the current map pose
     if ((p_map - p_now).norm() > options_.max_loop_distance_m ||
         std::abs(wrapAngle(yaw_map - yawOf(q_now))) > options_.max_loop_yaw_rad) {

@@ -49,6 +49,7 @@ struct LoopEvent {
   std::uint32_t old_keyframe = 0, new_keyframe = 0;  ///< pose-graph node indices
   TimeNs old_t_ns = 0, new_t_ns = 0;
   int votes = 0, matches = 0, inliers = 0;
+  double sigma_position_m = 0;  ///< PnP position uncertainty (PlaceVerification)
   RelativePose4 relative;  ///< new keyframe in the old one's frame (from PnP)
   bool to_map = false;     ///< the old keyframe is from a loaded map (a relocalization)
 };
@@ -116,7 +117,7 @@ class LoopCloser {
   /// keyframe's odometry frame): relocalizes once confirmed, else a loop checked against the
   /// current map pose. True when it became a loop edge.
   bool mapMatch(const Keyframe& now, std::uint32_t old_id, std::uint32_t new_node, const RelativePose4& rel,
-                const PlaceCandidate& c, int matches, int inliers);
+                const PlaceCandidate& c, const PlaceVerification& v);
 
   LoopOptions options_;
   std::unique_ptr<camera::CameraModel> camera_;

@@ -23,8 +23,13 @@ struct VerifyOptions {
   double ratio = 0.8;          ///< and clearly nearer than the second nearest landmark
   int min_inliers = 25;        ///< PnP inliers needed for a loop
   double reprojection_px = 3;  ///< RANSAC inlier threshold
-  double focal_px = 460;       ///< to turn it into normalized units
+  double focal_px = 460;       ///< to turn it into normalized units (set from the left camera)
   int iterations = 200;
+  /// A loop's PnP position uncertainty (worst axis, 1 sigma; positionSigma with 1 px noise and
+  /// stereo-only depth, so it overstates) above this is refused: far landmarks leave the
+  /// translation loose (docs/loop-closure.md#measured).
+  double max_sigma_position_m = 0.5;
+  double stereo_baseline_m = 0.11;  ///< depth uncertainty of the stored landmarks (set from the rig)
 };
 
 struct PoseGraphOptions {
@@ -74,6 +79,9 @@ struct LoopOptions {
     v.param({"loop_min_inliers", "PnP inliers that make a loop", ParamRule::kPositive}, verify.min_inliers);
     v.param({"loop_extra_corners", "recognition corners per keyframe beside the landmarks'", ParamRule::kNonNegative},
             extra_corners);
+    v.param({"loop_max_position_sigma", "m, a loop whose PnP position is more uncertain (1 sigma, worst axis) is refused",
+             ParamRule::kPositive},
+            verify.max_sigma_position_m);
     v.param({"loop_use_candidates", "0/1, dynamic candidates not yet cleared join the loop closer's landmarks"},
             use_candidates);
     v.param({"loop_keyframe_distance", "m, keyframes nearer than this to the last one taken are skipped (unless turned)",

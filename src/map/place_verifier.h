@@ -31,12 +31,24 @@ struct PlaceQuery {
 struct PlaceVerification {
   bool accepted = false;
   int matches = 0, inliers = 0;
+  /// Standard deviation (m) of the query camera's position along its worst axis, propagated from
+  /// pixel noise and the candidate landmarks' stereo depth uncertainty (positionSigma).
+  double sigma_position_m = 0;
   /// The query's body pose in the candidate's world frame (valid when accepted).
   Eigen::Vector3d p_w_b = Eigen::Vector3d::Zero();
   Eigen::Quaterniond q_w_b = Eigen::Quaterniond::Identity();
 };
 
-/// Matches the query to `candidate`'s landmarks and solves PnP RANSAC; T_b_c is the left camera in the body.
+/// The worst-axis standard deviation (m) of a camera position solved by PnP from these landmarks
+/// (world) and the camera pose T_c_w: first-order propagation of `sigma_px` pixel noise and of
+/// each landmark's uncertainty as triangulated from `seen_from` (camera centre, world) with a
+/// stereo baseline `baseline_m` (depth sigma d² σ / (f b), lateral d σ / f). Infinite if singular.
+double positionSigma(const std::vector<Eigen::Vector3d>& landmarks_w, const Eigen::Isometry3d& T_c_w,
+                     const Eigen::Vector3d& seen_from, double focal_px, double baseline_m, double sigma_px);
+
+/// Matches the query to `candidate`'s landmarks, solves PnP RANSAC and refines the pose on the
+/// inliers (Levenberg-Marquardt); refused when the position is too uncertain
+/// (VerifyOptions::max_sigma_position_m). T_b_c is the left camera in the body.
 PlaceVerification verifyPlace(const Keyframe& candidate, const PlaceQuery& query, const Eigen::Isometry3d& T_b_c,
                               const VerifyOptions& options = {});
 

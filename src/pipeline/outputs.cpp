@@ -75,15 +75,15 @@ std::vector<std::vector<StampedPose>> segments(const Result& r) {
 
 void writeLoopsCsv(const std::string& path, const std::vector<map::LoopEvent>& loops) {
   std::ofstream f(path);
-  f << "# old_t_ns,new_t_ns,old_keyframe,new_keyframe,votes,matches,inliers,dx,dy,dz,dyaw_rad,to_map"
+  f << "# old_t_ns,new_t_ns,old_keyframe,new_keyframe,votes,matches,inliers,dx,dy,dz,dyaw_rad,to_map,sigma_position_m"
        " (new keyframe in the old one's body frame, 4-DoF; keyframes are pose-graph nodes; to_map 1: the old"
-       " keyframe is from the loaded map, its time on that map's clock)\n";
-  char line[256];
+       " keyframe is from the loaded map, its time on that map's clock; sigma_position_m: PnP position uncertainty)\n";
+  char line[288];
   for (const auto& l : loops) {
-    std::snprintf(line, sizeof(line), "%lld,%lld,%u,%u,%d,%d,%d,%.6f,%.6f,%.6f,%.6f,%d\n",
+    std::snprintf(line, sizeof(line), "%lld,%lld,%u,%u,%d,%d,%d,%.6f,%.6f,%.6f,%.6f,%d,%.4f\n",
                   static_cast<long long>(l.old_t_ns), static_cast<long long>(l.new_t_ns), l.old_keyframe, l.new_keyframe,
                   l.votes, l.matches, l.inliers, l.relative.t_from_to.x(), l.relative.t_from_to.y(),
-                  l.relative.t_from_to.z(), l.relative.dyaw, l.to_map ? 1 : 0);
+                  l.relative.t_from_to.z(), l.relative.dyaw, l.to_map ? 1 : 0, l.sigma_position_m);
     f << line;
   }
   if (!f) throw InputError(path, "write failed");

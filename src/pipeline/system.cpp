@@ -103,9 +103,13 @@ System::System(const Config& config, const RunOptions& run)
     throw std::invalid_argument("a pipelined run needs RunOptions::feedback_delay 1");
   if (run_.pipelined) worker_ = std::make_unique<Worker>();
   td_s_ = config_.estimator.td_s;
-  if (config_.loop.enabled)
-    loop_ = std::make_unique<map::LoopCloser>(config_.loop, camera::makeCamera(config_.cams.at(0)), config_.T_b_c.at(0),
+  if (config_.loop.enabled) {
+    map::LoopOptions loop = config_.loop;
+    if (config_.T_b_c.size() > 1)  // the stored landmarks' depth uncertainty
+      loop.verify.stereo_baseline_m = (config_.T_b_c[1].translation() - config_.T_b_c[0].translation()).norm();
+    loop_ = std::make_unique<map::LoopCloser>(loop, camera::makeCamera(config_.cams.at(0)), config_.T_b_c.at(0),
                                               /*threaded=*/true);
+  }
 }
 
 System::~System() = default;
