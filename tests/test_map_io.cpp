@@ -42,6 +42,7 @@ SavedMap randomMap(int keyframes) {
     m.nodes.push_back(node);
   }
   m.loops.push_back({1, static_cast<std::size_t>(keyframes - 1), RelativePose4{{0.123456789012345, -2, 3}, 0.5}});
+  m.rig = "PINHOLE 752x480 f 380.00 380.00 (a test rig)";
   return m;
 }
 
@@ -66,6 +67,7 @@ class MapIo : public ::testing::Test {
 
 TEST_F(MapIo, SaveLoadRoundTripIsExact) {
   const SavedMap a = randomMap(12), b = loadMap(dir_.string());
+  EXPECT_EQ(a.rig, b.rig);
   ASSERT_EQ(a.keyframes.size(), b.keyframes.size());
   for (std::size_t k = 0; k < a.keyframes.size(); ++k) {
     const Keyframe &x = a.keyframes[k], &y = b.keyframes[k];
