@@ -135,7 +135,7 @@ def reuse(data, out_dir):
                    "map_odometry_ate_m": sm.get("ate_rmse_m"), "map_loop_ate_m": sm["loop_closure"].get("ate_rmse_m"),
                    "map_static_on_moving_pct": 100 * sm["classification"]["static_map_fraction_on_moving"],
                    "relocalized": m["relocalized"], "unconfirmed_matches": m["unconfirmed_matches"],
-                   "loops_to_map": m["loops_to_map"]}
+                   "loops_to_map": m["loops_to_map"], "loc_odometry_ate_m": sl.get("ate_rmse_m")}
             # the map frame in the world: the map run's corrected trajectory aligned to its ground truth
             gt_map, gt_loc = ground_truth(map_seq), ground_truth(loc_seq)
             ta, pa = read_tum(os.path.join(map_out, "trajectory_loop.tum"))
@@ -201,18 +201,22 @@ def markdown(loop_rows, reuse_rows):
             r["graph_solves"], r["graph_ms_per_solve"],
             r["graph_ms_per_solve"] * r["graph_solves"] / max(1, r["keyframes"]), r["resets"]))
     out += ["", "## Map reuse under new traffic (map: traffic seed 11; localized: traffic seed 12, --localization-only)",
-            "", "| place | map built by | map landmarks | on parked cars | first relocalization (s) | frames "
-            "localized | relocalization RMSE (m) | max (m) | loops to map | wrong relocalizations | unconfirmed "
-            "matches |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+            "", "| place | map built by | map run ATE, odometry / loop (m) | map run's static map on moving objects | map landmarks | on parked cars | first "
+            "relocalization (s) | frames localized | relocalization RMSE (m) | max (m) | localized run ATE (m) | "
+            "loops to map | wrong relocalizations | unconfirmed matches |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in reuse_rows:
         if r.get("missing"):
-            out.append("| %s | %s | not run ||||||||| |" % (r["place"], r["mode"]))
+            out.append("| %s | %s | not run ||||||||||| |" % (r["place"], r["mode"]))
             continue
-        out.append("| %s | %s | %d | %d (%.1f %%) | %s | %s | %s | %s | %d | %d | %d |" % (
-            r["place"], r["mode"], r["map_landmarks"], r["map_landmarks_on_parked"],
+        out.append("| %s | %s | %s / %s | %.2f %% | %d | %d (%.1f %%) | %s | %s | %s | %s | %s | %d | %d | %d |" % (
+            r["place"], r["mode"], fmt(r["map_odometry_ate_m"]), fmt(r["map_loop_ate_m"]), r["map_static_on_moving_pct"],
+            r["map_landmarks"],
+            r["map_landmarks_on_parked"],
             100.0 * r["map_landmarks_on_parked"] / max(1, r["map_landmarks"]), fmt(r.get("first_relocalization_s"), "%.1f"),
             fmt(100 * r["localized_share"] if "localized_share" in r else None, "%.1f %%"),
-            fmt(r.get("relocalization_rmse_m")), fmt(r.get("relocalization_max_m")), r["loops_to_map"],
+            fmt(r.get("relocalization_rmse_m")), fmt(r.get("relocalization_max_m")), fmt(r["loc_odometry_ate_m"]),
+            r["loops_to_map"],
             r["wrong_relocalizations"], r["unconfirmed_matches"]))
     return "\n".join(out) + "\n"
 
