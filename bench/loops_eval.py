@@ -45,7 +45,9 @@ def ground_truth(dataset):
 
 
 def loop_errors(dataset, loops_csv, map_dataset=None):
-    """(translation error m, yaw error rad, to_map) per loop."""
+    """Per loop: translation (m) and yaw (rad) error of its relative pose against the ground truth,
+    and to_map (a loop to a loaded map: the old keyframe's time is on map_dataset's clock; same
+    world frame). tests/loop_check.py uses it too."""
     pose = ground_truth(dataset)
     map_pose = ground_truth(map_dataset) if map_dataset else pose
     out = []
@@ -72,6 +74,7 @@ def read_tum(path):
 
 
 def umeyama_se3(src, dst):
+    """R, t minimizing |R src + t - dst| (no scale)."""
     ms, md = src.mean(0), dst.mean(0)
     U, _, Vt = np.linalg.svd((dst - md).T @ (src - ms))
     R = U @ np.diag([1, 1, np.sign(np.linalg.det(U @ Vt))]) @ Vt

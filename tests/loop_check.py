@@ -10,7 +10,6 @@ closes loops to the map only; a map from another camera and option misuse are on
 Debian's python3 with numpy.
 
 Usage: loop_check.py IDYVINS_BINARY WORK_DIR [--keep]"""
-import bisect
 import json
 import math
 import os
@@ -20,6 +19,9 @@ import sys
 
 import numpy as np
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench"))
+from loops_eval import ground_truth, loop_errors, read_tum, umeyama_se3  # noqa: E402  (the benchmark's own measures)
+
 failures = []
 
 
@@ -27,45 +29,6 @@ def check(cond, what):
     print(("ok   " if cond else "FAIL ") + what, flush=True)
     if not cond:
         failures.append(what)
-
-
-def yaw(R):
-    return math.atan2(R[1, 0], R[0, 0])
-
-
-def rotation(w, x, y, z):
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
-def ground_truth(dataset):
-    gt = np.loadtxt(os.path.join(dataset, "mav0", "state_groundtruth_estimate0", "data.csv"), delimiter=",",
-                    comments="#")
-    ts = gt[:, 0].astype(np.int64)
-
-    def pose(t):
-        r = gt[min(bisect.bisect_left(ts, t), len(ts) - 1)]
-        return r[1:4], rotation(*r[4:8])
-    return pose
-
-
-def loop_errors(dataset, loops_csv, map_dataset=None):
-    """Per loop: translation (m) and yaw (rad) error of its relative pose against the ground truth
-    (a loop to a loaded map: the old keyframe's time is on map_dataset's clock; same world frame)."""
-    pose = ground_truth(dataset)
-    map_pose = ground_truth(map_dataset) if map_dataset else pose
-    errors = []
-    for line in open(loops_csv):
-        if line.startswith("#"):
-            continue
-        f = line.strip().split(",")
-        p0, R0 = (map_pose if len(f) > 11 and f[11] == "1" else pose)(int(f[0]))
-        p1, R1 = pose(int(f[1]))
-        d_t = np.linalg.norm(R0.T @ (p1 - p0) - np.array([float(v) for v in f[7:10]]))
-        d_yaw = abs((yaw(R1) - yaw(R0) - float(f[10]) + math.pi) % (2 * math.pi) - math.pi)
-        errors.append((d_t, d_yaw))
-    return errors
 
 
 def main(idy, work):
@@ -107,20 +70,6 @@ def main(idy, work):
     return 1 if failures else 0
 
 
-def read_tum(path):
-    rows = np.array([[float(v) for v in l.split()] for l in open(path) if not l.startswith("#")])
-    return (rows[:, 0] * 1e9).round().astype(np.int64), rows[:, 1:4], rows[:, 4:8]
-
-
-def umeyama_se3(src, dst):
-    """R, t minimizing |R src + t - dst| (no scale)."""
-    ms, md = src.mean(0), dst.mean(0)
-    U, _, Vt = np.linalg.svd((dst - md).T @ (src - ms))
-    D = np.diag([1, 1, np.sign(np.linalg.det(U @ Vt))])
-    R = U @ D @ Vt
-    return R, md - R @ ms
-
-
 def relocalization(idy, work, seq_a, cfg, out_a, saved):
     seq_b, out_b, saved_b = (os.path.join(work, n) for n in ("seq_b", "out_b", "map_b"))
     r = subprocess.run([idy, "simulate", "--scene", "parking_lot", "--level", "none", "--seed", "1", "--traffic-seed",
@@ -141,9 +90,9 @@ def relocalization(idy, work, seq_a, cfg, out_a, saved):
           "no wrong relocalization or false loop (%d loops, worst %.3f m, %.2f deg)" % (len(errors), *worst))
     # Map poses against the ground truth through the first run's alignment (no re-alignment).
     gt_a, gt_b = ground_truth(seq_a), ground_truth(seq_b)
-    ta, pa, _ = read_tum(os.path.join(out_a, "trajectory_loop.tum"))
+    ta, pa = read_tum(os.path.join(out_a, "trajectory_loop.tum"))
     R, t = umeyama_se3(pa, np.array([gt_a(x)[0] for x in ta]))
-    tb, pb, _ = read_tum(os.path.join(out_b, "trajectory_loop.tum"))
+    tb, pb = read_tum(os.path.join(out_b, "trajectory_loop.tum"))
     after = tb >= m["first_relocalization_t_ns"]
     err = np.linalg.norm((pb[after] @ R.T + t) - np.array([gt_b(x)[0] for x in tb[after]]), axis=1)
     check(after.sum() > 100 and np.sqrt((err ** 2).mean()) < 0.1,

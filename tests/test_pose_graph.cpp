@@ -1,5 +1,6 @@
 // The 4-DoF pose graph of loop closure: its edge Jacobians against numerical ones, a drifted
-// loop corrected by one loop edge, one wrong loop among right ones held off by the robust loss.
+// loop corrected by one loop edge, one wrong loop among right ones held off by the robust loss;
+// the drift allowance a loop must fall within.
 
 #include <gtest/gtest.h>
 
@@ -7,6 +8,7 @@
 #include <random>
 
 #include "jacobian_check.h"
+#include "map/loop_closer.h"
 #include "map/pose_graph.h"
 
 namespace idyvins::map {
@@ -220,6 +222,30 @@ TEST(PoseGraph, ASessionRelocalizedInALoadedMapLandsOnItAndLeavesTheMapAlone) {
   const double before = rmse(odom_in_map, truth), after = rmse(corrected, truth);
   EXPECT_GT(before, 0.5);
   EXPECT_LT(after, 0.2 * before) << "before " << before << " m, after " << after << " m";
+}
+
+TEST(LoopConsistency, ALoopMayUndoTheDriftOfThePathSinceTheGraphLastFixedThePoseNotMore) {
+  const LoopOptions options;  // 0.3 m + 3 % of the path; 0.05 rad + 0.001 rad/m
+  const Eigen::Vector3d p_old(10, 5, 1);
+  const Eigen::Quaterniond q_old = ypr(0.4, 0.05, -0.03);
+  // The new keyframe 2 m ahead and 1 m left of the old one, turned 0.2 rad: the loop says exactly that.
+  const RelativePose4 rel{Eigen::Vector3d(2, 1, 0), 0.2};
+  const Eigen::Vector3d p_now = p_old + q_old * rel.t_from_to;
+  const Eigen::Quaterniond q_now = ypr(0.6, 0.05, -0.03);
+  EXPECT_TRUE(loopWithinDrift(p_old, q_old, p_now, q_now, rel, 0, options));
+  // The estimate 0.25 m off: within the base; 0.5 m off: only after 10 m of path (0.3 + 0.3 m).
+  const Eigen::Vector3d east = Eigen::Vector3d::UnitX();
+  EXPECT_TRUE(loopWithinDrift(p_old, q_old, p_now + 0.25 * east, q_now, rel, 0, options));
+  EXPECT_FALSE(loopWithinDrift(p_old, q_old, p_now + 0.5 * east, q_now, rel, 5, options));
+  EXPECT_TRUE(loopWithinDrift(p_old, q_old, p_now + 0.5 * east, q_now, rel, 10, options));
+  // A place that repeats 10.2 m along (the city block's facade): refused unless the path since
+  // the graph was last solved is long enough for such drift (> 330 m).
+  EXPECT_FALSE(loopWithinDrift(p_old, q_old, p_now + 10.2 * east, q_now, rel, 20, options));
+  EXPECT_FALSE(loopWithinDrift(p_old, q_old, p_now + 10.2 * east, q_now, rel, 300, options));
+  EXPECT_TRUE(loopWithinDrift(p_old, q_old, p_now + 10.2 * east, q_now, rel, 340, options));
+  // Yaw: 0.1 rad off needs 50 m of path.
+  EXPECT_FALSE(loopWithinDrift(p_old, q_old, p_now, ypr(0.7, 0.05, -0.03), rel, 40, options));
+  EXPECT_TRUE(loopWithinDrift(p_old, q_old, p_now, ypr(0.7, 0.05, -0.03), rel, 60, options));
 }
 
 }  // namespace

@@ -169,7 +169,7 @@ void LoopCloser::handle(LoopKeyframe& in) {
     solve(node);
   const PoseGraphNode& newest = graph_.nodes()[node];
   std::lock_guard<std::mutex> lock(correction_mutex_);
-  correction_ = {loaded_ == 0 || stats_.relocalized, newest.p_odom, newest.p, wrapAngle(newest.yaw - yawOf(newest.q_odom))};
+  correction_ = {loaded_ == 0 || stats_.relocalized, newest};
 }
 
 bool LoopCloser::correctNow(const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom, Eigen::Vector3d& p_w_b,
@@ -182,9 +182,7 @@ bool LoopCloser::correctNow(const Eigen::Vector3d& p_odom, const Eigen::Quaterni
   p_w_b = p_odom;
   q_w_b = q_odom;
   if (loaded_ > 0 && !c.in_map) return false;
-  const Eigen::Matrix3d R = rotZ(c.dyaw);
-  p_w_b = R * (p_odom - c.p_odom) + c.p;
-  q_w_b = Eigen::Quaterniond(R * q_odom.toRotationMatrix()).normalized();
+  applyCorrection(c.newest, p_odom, q_odom, p_w_b, q_w_b);
   return true;
 }
 
@@ -208,10 +206,8 @@ bool LoopCloser::tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint
       if (mapMatch(now, c.keyframe, new_node, rel, c, v)) return true;
       continue;
     }
-    // Within the run: against the odometry's own guess, a wild jump is no loop.
-    const RelativePose4 odo = relativePose4(old.p_w_b, old.q_w_b, now.p_w_b, now.q_w_b);
-    if ((rel.t_from_to - odo.t_from_to).norm() > options_.max_loop_distance_m ||
-        std::abs(wrapAngle(rel.dyaw - odo.dyaw)) > options_.max_loop_yaw_rad) {
+    // Within the run: against the corrected estimate, a jump beyond the drift is no loop.
+    if (!consistent(c.keyframe, new_node, rel, std::max(c.keyframe, solvedNode()))) {
       ++stats_.refused_by_consistency;
       continue;
     }
@@ -222,6 +218,36 @@ bool LoopCloser::tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint
     return true;
   }
   return false;
+}
+
+bool loopWithinDrift(const Eigen::Vector3d& p_old, const Eigen::Quaterniond& q_old, const Eigen::Vector3d& p_now,
+                     const Eigen::Quaterniond& q_now, const RelativePose4& rel, double path_m, const LoopOptions& options) {
+  const double shift = (p_old + q_old * rel.t_from_to - p_now).norm();
+  const double turn = std::abs(wrapAngle(yawOf(q_old) + rel.dyaw - yawOf(q_now)));
+  return shift <= options.max_loop_shift_m + options.max_loop_shift_per_m * path_m &&
+         turn <= options.max_loop_yaw_rad + options.max_loop_yaw_per_m * path_m;
+}
+
+std::uint32_t LoopCloser::solvedNode() const {
+  return stats_.graph_solves > 0 ? last_solve_node_ : static_cast<std::uint32_t>(graph_.sessionStart());
+}
+
+double LoopCloser::pathLength(std::uint32_t from, std::uint32_t to) const {
+  const std::vector<PoseGraphNode>& nodes = graph_.nodes();
+  double length = 0;
+  for (std::size_t i = std::max<std::size_t>(from, graph_.sessionStart()) + 1; i <= to; ++i)
+    length += (nodes[i].p_odom - nodes[i - 1].p_odom).norm();
+  return length;
+}
+
+bool LoopCloser::consistent(std::uint32_t old_id, std::uint32_t new_node, const RelativePose4& rel,
+                            std::uint32_t anchor) const {
+  // Where the loop puts the new keyframe: the old keyframe's corrected pose, then `rel`.
+  Eigen::Vector3d p_old, p_now;
+  Eigen::Quaterniond q_old, q_now;
+  graph_.correctedPose(old_id, p_old, q_old);
+  graph_.correctedPose(new_node, p_now, q_now);
+  return loopWithinDrift(p_old, q_old, p_now, q_now, rel, pathLength(anchor, new_node), options_);
 }
 
 bool LoopCloser::mapMatch(const Keyframe& now, std::uint32_t old_id, std::uint32_t new_node, const RelativePose4& rel,
@@ -236,8 +262,7 @@ bool LoopCloser::mapMatch(const Keyframe& now, std::uint32_t old_id, std::uint32
   const LoopEvent event{old_id,    new_node,  database_.keyframe(old_id).t_ns, now.t_ns, c.votes, v.matches,
                         v.inliers, v.sigma_position_m, rel, true};
   if (stats_.relocalized) {  // tied to the map already: against the current map pose
-    if ((p_map - p_now).norm() > options_.max_loop_distance_m ||
-        std::abs(wrapAngle(yaw_map - yawOf(q_now))) > options_.max_loop_yaw_rad) {
+    if (!consistent(old_id, new_node, rel, solvedNode())) {
       ++stats_.refused_by_consistency;
       return false;
     }

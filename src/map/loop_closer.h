@@ -68,6 +68,13 @@ struct LoopStats {
   TimeNs first_relocalization_t_ns = 0;  ///< the keyframe that confirmed the first relocalization
 };
 
+/// Whether a loop `rel` from the old keyframe (corrected pose p_old, q_old) puts the new keyframe
+/// within the drift allowance of its corrected pose (p_now, q_now) after `path_m` metres of
+/// odometry since the graph last fixed it: LoopOptions::max_loop_shift_m + max_loop_shift_per_m
+/// * path_m in position, max_loop_yaw_rad + max_loop_yaw_per_m * path_m in yaw.
+bool loopWithinDrift(const Eigen::Vector3d& p_old, const Eigen::Quaterniond& q_old, const Eigen::Vector3d& p_now,
+                     const Eigen::Quaterniond& q_now, const RelativePose4& rel, double path_m, const LoopOptions& options);
+
 class LoopCloser {
  public:
   /// `left_camera` lifts the extra corners; T_b_c the left camera in the body. threaded: a worker thread.
@@ -113,6 +120,13 @@ class LoopCloser {
   void handle(LoopKeyframe& keyframe);
   bool tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint32_t new_node);
   void solve(std::uint32_t newest);  ///< optimizes the pose graph (newest: the node handled last)
+  /// The newest node the last solve saw (the session's first before any solve).
+  std::uint32_t solvedNode() const;
+  /// Odometry path length (m) from node `from` to node `to` within the session.
+  double pathLength(std::uint32_t from, std::uint32_t to) const;
+  /// Whether a loop old_id -> new_node moves the new node's corrected pose by no more than the
+  /// drift allowed for the path since `anchor` (LoopOptions::max_loop_shift_m and siblings).
+  bool consistent(std::uint32_t old_id, std::uint32_t new_node, const RelativePose4& rel, std::uint32_t anchor) const;
   /// A verified match of the new node to a map keyframe (PnP pose p_w_b/q_w_b in the old
   /// keyframe's odometry frame): relocalizes once confirmed, else a loop checked against the
   /// current map pose. True when it became a loop edge.
@@ -145,8 +159,7 @@ class LoopCloser {
   /// The newest node's correction, published after each keyframe for correctNow().
   struct Correction {
     bool in_map = true;
-    Eigen::Vector3d p_odom = Eigen::Vector3d::Zero(), p = Eigen::Vector3d::Zero();
-    double dyaw = 0;
+    PoseGraphNode newest;  ///< identity correction until a keyframe is handled
   };
   mutable std::mutex correction_mutex_;
   Correction correction_;

@@ -50,8 +50,13 @@ struct LoopOptions {
   /// min_keyframe_turn_rad) is skipped: the database grows with the places seen, not with time.
   double min_keyframe_distance_m = 0.3;
   double min_keyframe_turn_rad = 0.17;
-  double max_loop_distance_m = 20.0;  ///< a loop's translation from the odometry guess beyond this is refused
-  double max_loop_yaw_rad = 0.5;      ///< likewise its yaw
+  /// A loop may move the newest keyframe from its corrected pose by at most the drift the
+  /// odometry can have gathered since the graph last fixed it: base + rate x the path (odometry
+  /// length) since the later of the old keyframe and the last solved node; more is refused.
+  double max_loop_shift_m = 0.3;
+  double max_loop_shift_per_m = 0.03;      ///< 3 % of the path
+  double max_loop_yaw_rad = 0.05;          ///< likewise the yaw: base,
+  double max_loop_yaw_per_m = 0.001;       ///< rad per metre of path
   double max_tilt_rad = 0.1;          ///< PnP's roll/pitch disagreeing with the odometry's by more: refused
   /// The pose graph is solved at the first loop and at a relocalization at once, then at most
   /// every this many keyframes while loops come, and at the end (VINS-Fusion solves whenever
@@ -84,6 +89,12 @@ struct LoopOptions {
             verify.max_sigma_position_m);
     v.param({"loop_use_candidates", "0/1, dynamic candidates not yet cleared join the loop closer's landmarks"},
             use_candidates);
+    v.param({"loop_max_shift", "m, a loop moving the newest keyframe farther from its corrected pose (plus the drift allowance) is refused",
+             ParamRule::kPositive},
+            max_loop_shift_m);
+    v.param({"loop_max_drift", "drift allowance of loop_max_shift per metre travelled since the graph last fixed the pose",
+             ParamRule::kNonNegative},
+            max_loop_shift_per_m);
     v.param({"loop_keyframe_distance", "m, keyframes nearer than this to the last one taken are skipped (unless turned)",
              ParamRule::kNonNegative},
             min_keyframe_distance_m);

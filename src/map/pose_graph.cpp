@@ -26,15 +26,12 @@ Eigen::Matrix3d tiltOf(const Eigen::Quaterniond& q_w_b) {
   return rotZ(yawOf(q_w_b)).transpose() * q_w_b.toRotationMatrix();
 }
 
-namespace {
-/// `p_odom`, `q_odom` moved by node n's correction (its yaw change about n, its position shift).
 void applyCorrection(const PoseGraphNode& n, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom,
                      Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) {
   const Eigen::Matrix3d R = rotZ(wrapAngle(n.yaw - yawOf(n.q_odom)));
   p_w_b = R * (p_odom - n.p_odom) + n.p;
   q_w_b = Eigen::Quaterniond(R * q_odom.toRotationMatrix()).normalized();
 }
-}  // namespace
 
 RelativePose4 relativePose4(const Eigen::Vector3d& p_w_from, const Eigen::Quaterniond& q_w_from,
                             const Eigen::Vector3d& p_w_to, const Eigen::Quaterniond& q_w_to) {

@@ -57,6 +57,11 @@ struct PoseGraphNode {
   bool fixed = false;                           ///< held during optimization (the first node, a loaded map)
 };
 
+/// An odometry pose moved by node n's correction: yaw turned by n's yaw change about n,
+/// position kept at the same offset from n.
+void applyCorrection(const PoseGraphNode& n, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom,
+                     Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b);
+
 struct LoopEdge {
   std::size_t from = 0, to = 0;  ///< node indices, from the older keyframe to the newer
   RelativePose4 measured;
