@@ -4,7 +4,9 @@
 Looping sequences (DATA/{garage,block}_{none,high}_s{1,2,3}, each run in baseline and idy with loop
 closure): odometry ATE (trajectory.tum) and loop ATE (trajectory_loop.tum), both SE(3)-aligned as
 stats.json computes them; loops; false loops (a loop edge whose relative pose disagrees with the
-ground truth by more than 0.3 m or 3 deg); detection and pose-graph cost; odometry time per frame.
+ground truth by more than 0.3 m or 3 deg); the odometry's scale error and both ATEs after a similarity
+alignment (a global scale error no loop can observe taken out); detection and pose-graph cost;
+odometry time per frame.
 
 Map reuse (a map built from traffic seed 11, the same place localized with traffic seed 12, other
 traffic and the parked cars moved): time to the first relocalization, share of frames localized
@@ -81,6 +83,21 @@ def umeyama_se3(src, dst):
     return R, md - R @ ms
 
 
+def ate_sim3(dataset, tum):
+    """(RMSE m, scale) of a TUM trajectory against the ground truth after a similarity alignment
+    (Umeyama with scale): what is left when a global scale error, which no loop can observe, is
+    taken out. scale < 1: the estimate is too large."""
+    gt = ground_truth(dataset)
+    t, p = read_tum(tum)
+    g = np.array([gt(x)[0] for x in t])
+    X, Y = p - p.mean(0), g - g.mean(0)
+    U, S, Vt = np.linalg.svd(Y.T @ X)
+    D = np.diag([1, 1, np.sign(np.linalg.det(U @ Vt))])
+    R = U @ D @ Vt
+    scale = np.trace(np.diag(S) @ D) / (X ** 2).sum()
+    return float(np.sqrt((np.linalg.norm(scale * X @ R.T - Y, axis=1) ** 2).mean())), float(scale)
+
+
 def read_ply_xyz(path):
     with open(path) as f:
         for line in f:
@@ -107,10 +124,14 @@ def looping(data, out_dir):
         s = summary(out)
         lc = s["loop_closure"]
         errors = loop_errors(os.path.join(data, seq), os.path.join(out, "loops.csv"))
+        odo_sim3, scale = ate_sim3(os.path.join(data, seq), os.path.join(out, "trajectory.tum"))
+        loop_sim3 = ate_sim3(os.path.join(data, seq), os.path.join(out, "trajectory_loop.tum"))[0] \
+            if os.path.exists(os.path.join(out, "trajectory_loop.tum")) else None
         frame_ms = s["mean_tracking_ms"] + s["mean_optimization_ms"] + s["mean_marginalization_ms"] + \
             s["mean_filter_ms"]
         rows.append({"sequence": seq, "mode": mode, "ate_m": s.get("ate_rmse_m"),
                      "loop_ate_m": lc.get("ate_rmse_m"), "loops": lc["loops"],
+                     "ate_sim3_m": odo_sim3, "loop_ate_sim3_m": loop_sim3, "scale_error_pct": 100 * (1 / scale - 1),
                      "false_loops": false_loops(errors),
                      "worst_loop_m": max((e[0] for e in errors), default=0.0),
                      "worst_loop_deg": math.degrees(max((e[1] for e in errors), default=0.0)),
@@ -174,7 +195,8 @@ def fmt(v, f="%.3f"):
 
 def summary_table(loop_rows):
     """Per place, traffic and mode: runs, loop/odometry ATE ratio (worst and mean), false loops."""
-    out = ["| sequences | mode | runs | loop / odometry ATE, worst (mean) | false loops |", "|---|---|---|---|---|"]
+    out = ["| sequences | mode | runs | loop / odometry ATE, worst (mean) | the same, scale aligned | false loops |",
+           "|---|---|---|---|---|---|"]
     groups = {}
     for r in loop_rows:
         if r.get("missing") or r["ate_m"] is None or r["loop_ate_m"] is None:
@@ -183,23 +205,28 @@ def summary_table(loop_rows):
         groups.setdefault(key, []).append(r)
     for (seq, mode), rows in sorted(groups.items()):
         ratios = [r["loop_ate_m"] / r["ate_m"] for r in rows]
-        out.append("| %s | %s | %d | %.2f (%.2f) | %d |" % (seq, mode, len(rows), max(ratios),
-                                                           sum(ratios) / len(ratios), sum(r["false_loops"] for r in rows)))
+        sim3 = [r["loop_ate_sim3_m"] / r["ate_sim3_m"] for r in rows]
+        out.append("| %s | %s | %d | %.2f (%.2f) | %.2f (%.2f) | %d |" % (
+            seq, mode, len(rows), max(ratios), sum(ratios) / len(ratios), max(sim3), sum(sim3) / len(sim3),
+            sum(r["false_loops"] for r in rows)))
     return out
 
 
 def markdown(loop_rows, reuse_rows):
     out = ["## Looping sequences (3 min; loop closure on)", ""] + summary_table(loop_rows) + ["",
-           "| sequence | mode | odometry ATE (m) | loop ATE (m) | loop / odometry | loops | false loops | worst loop "
+           "| sequence | mode | odometry ATE (m) | loop ATE (m) | loop / odometry | odometry scale error | "
+           "scale aligned: odometry / loop ATE (m) | loops | false loops | worst loop "
            "(m, °) | keyframes | detect ms/kf | graph solves, ms each | graph ms/kf | resets |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in loop_rows:
         if r.get("missing"):
-            out.append("| %s | %s | not run ||||||||||| |" % (r["sequence"], r["mode"]))
+            out.append("| %s | %s | not run ||||||||||||| |" % (r["sequence"], r["mode"]))
             continue
         ratio = r["loop_ate_m"] / r["ate_m"] if r["ate_m"] and r["loop_ate_m"] is not None else None
-        out.append("| %s | %s | %s | %s | %s | %d | %d | %.3f, %.2f | %d | %.0f | %d, %.0f | %.0f | %d |" % (
-            r["sequence"], r["mode"], fmt(r["ate_m"]), fmt(r["loop_ate_m"]), fmt(ratio, "%.2f"), r["loops"],
+        out.append("| %s | %s | %s | %s | %s | %+.2f %% | %.3f / %s | %d | %d | %.3f, %.2f | %d | %.0f | %d, %.0f | %.0f "
+                   "| %d |" % (
+            r["sequence"], r["mode"], fmt(r["ate_m"]), fmt(r["loop_ate_m"]), fmt(ratio, "%.2f"), r["scale_error_pct"],
+            r["ate_sim3_m"], fmt(r["loop_ate_sim3_m"]), r["loops"],
             r["false_loops"], r["worst_loop_m"], r["worst_loop_deg"], r["keyframes"], r["detect_ms_per_keyframe"],
             r["graph_solves"], r["graph_ms_per_solve"],
             r["graph_ms_per_solve"] * r["graph_solves"] / max(1, r["keyframes"]), r["resets"]))

@@ -16,6 +16,8 @@ out = sys.argv[1]
 plots = os.path.join(out, "plots")
 os.makedirs(plots, exist_ok=True)
 results = json.load(open(os.path.join(out, "results.json")))
+for r in results:  # run folders are relative to OUT (results.json is the same wherever the jobs ran)
+    r["run"] = os.path.join(out, r["run"])
 
 
 def align(P, Q):  # Umeyama SE3: Q ~ R P + t

@@ -20,6 +20,8 @@ PACKAGES=(
   libfaiss-dev
   # make fuzz: libFuzzer and the sanitizers' runtime
   clang libclang-rt-14-dev
+  # bench --plan: the GNU parallel recipe and its test
+  parallel
 )
 
 missing=()

@@ -16,7 +16,9 @@
 #include <sstream>
 #include <thread>
 
+#include "bench_sweep.h"
 #include "commands.h"
+#include "core/build_info.h"
 #include "core/error.h"
 #include "io/config.h"
 #include "progress.h"
@@ -32,6 +34,8 @@ struct BenchArgs {
   double duration = 60.0;
   bool ablations = false;
   bool reuse_runs = false;
+  std::string plan;                  ///< --plan FILE: write the jobs, run none
+  std::vector<std::string> collect;  ///< --collect DIR...: tables from finished job folders
   int jobs = 2;
   int run_threads = 1;
 };
@@ -45,21 +49,6 @@ std::string self() {
 }
 
 std::string quote(const std::string& s) { return "'" + s + "'"; }
-
-/// One run: a sequence (in a table column `group` at traffic `level`) in one mode.
-struct Job {
-  std::string sequence, group, level, mode, dataset, config, out;
-};
-
-nlohmann::json readSummary(const std::string& run_dir) {
-  std::ifstream in(run_dir + "/stats.json");
-  if (!in) return nullptr;
-  try {
-    return nlohmann::json::parse(in)["summary"];
-  } catch (const std::exception&) {
-    return nullptr;
-  }
-}
 
 /// ATE, or NaN for a failure (no output, not initialized, or ATE > 10 % of the path: diverged).
 double ateOf(const nlohmann::json& s) {
@@ -145,20 +134,13 @@ std::vector<std::pair<std::string, std::string>> simulateMissing(const BenchArgs
   return sequences;
 }
 
-/// Runs every job (`idyvins run` in a child process), `jobs` at a time, with a progress bar.
-void runJobs(const std::vector<Job>& jobs, const BenchArgs& a, const std::string& exe) {
+/// Runs every job (`idyvins run` in a child process), `jobs` at a time, with a progress bar;
+/// with --reuse-runs, jobs whose folder has a stats.json are kept.
+void runJobs(const std::vector<Job>& jobs, const BenchArgs& a, const std::string& exe, const fs::path& out) {
   std::atomic<std::size_t> next{0}, done{0};
   auto worker = [&] {
     for (std::size_t k = next++; k < jobs.size(); k = next++) {
-      const Job& j = jobs[k];
-      if (a.reuse_runs && fs::exists(fs::path(j.out) / "stats.json")) {  // finished earlier: keep it
-        ++done;
-        continue;
-      }
-      const std::string cmd = quote(exe) + " run --config " + quote(j.config) +
-                              " --dataset " + quote(j.dataset) + " --out " + quote(j.out) + " --mode " + j.mode +
-                              " --threads " + std::to_string(a.run_threads) + " > " +
-                              quote(j.out + ".log") + " 2>&1";
+      const std::string cmd = jobCommand(jobs[k], out, exe, a.run_threads, a.reuse_runs);
       (void)std::system(cmd.c_str());  // a failed run is reported as x in the tables
       ++done;
     }
@@ -177,16 +159,22 @@ void runJobs(const std::vector<Job>& jobs, const BenchArgs& a, const std::string
 
 /// The runs' summaries, grouped the ways the tables need them.
 struct Collected {
-  nlohmann::json results = nlohmann::json::array();
+  nlohmann::json results = nlohmann::json::array();  ///< results.json: what does not depend on the machine
+  nlohmann::json timing = nlohmann::json::array();   ///< timing.json: the rest
   std::map<std::string, std::map<std::string, std::vector<double>>> ate;  ///< scene_level -> mode -> per seed
   std::map<std::string, std::map<std::string, std::vector<nlohmann::json>>> by_level;  ///< level -> mode -> summaries
 };
 
-Collected collect(const std::vector<Job>& jobs) {
+Collected collect(const Sweep& sweep, const std::vector<JobResult>& found) {
   Collected c;
-  for (const Job& j : jobs) {
-    const nlohmann::json s = readSummary(j.out);
-    c.results.push_back({{"sequence", j.sequence}, {"mode", j.mode}, {"dataset", j.dataset}, {"run", j.out}, {"summary", s}});
+  for (std::size_t k = 0; k < sweep.jobs.size(); ++k) {
+    const Job& j = sweep.jobs[k];
+    const nlohmann::json& s = found[k].problem.empty() ? found[k].summary : nlohmann::json();
+    nlohmann::json timing = nlohmann::json::object();
+    const std::string run = "runs/" + j.name;
+    c.results.push_back({{"sequence", j.sequence}, {"mode", j.mode}, {"dataset", j.dataset}, {"run", run},
+                         {"summary", withoutTiming(s, timing)}});
+    c.timing.push_back({{"sequence", j.sequence}, {"mode", j.mode}, {"run", run}, {"timing", timing}});
     c.ate[j.group][j.mode].push_back(ateOf(s));
     if (!s.is_null()) c.by_level[j.level][j.mode].push_back(s);
   }
@@ -340,7 +328,7 @@ std::vector<Job> viodeJobs(const BenchArgs& a, const fs::path& dir, const fs::pa
       if (std::find(columns.begin(), columns.end(), group) == columns.end()) columns.push_back(group);
       for (const auto& mode : modes)
         jobs.push_back({group, group, level, mode, bag.string(), (out / "configs" / env / base.filename()).string(),
-                        (out / "runs" / (group + "_" + mode)).string()});
+                        group + "_" + mode, "", ""});
     }
   }
   if (jobs.empty())
@@ -349,47 +337,105 @@ std::vector<Job> viodeJobs(const BenchArgs& a, const fs::path& dir, const fs::pa
   return jobs;
 }
 
-int runBench(const BenchArgs& a) {
-  if (a.suite != "standard" && a.suite != "validation" && a.suite != "viode")
-    throw CLI::ValidationError("--suite", "expected standard, validation or viode, got '" + a.suite + "'");
-  if (a.suite == "viode" && a.data.empty()) throw CLI::ValidationError("--data", "the folder holding VIODE's bags");
-  parseSeeds(a.seeds);  // usage errors before any work
-  const std::string exe = self();
-  const fs::path out(a.out), data = a.data.empty() ? out / "data" : fs::path(a.data), runs = out / "runs";
-  std::error_code ec;
-  fs::create_directories(runs, ec);
-  fs::create_directories(data, ec);
-  if (ec) throw InputError(a.out, "cannot create folder: " + ec.message());
-  std::vector<std::string> modes = {"baseline", "ransac", "seg", "idy"};
-  if (a.ablations) modes.insert(modes.end(), {"idy-pre", "idy-ba"});
-  if (!a.modes.empty()) modes = parseModes(a.modes);
-
-  std::vector<Job> jobs;
-  std::vector<std::string> columns;
-  if (a.suite == "viode") {
-    jobs = viodeJobs(a, data, out, modes, columns);
-  } else {
-    for (const auto& scene : kScenes)
-      for (const auto& level : kLevels) columns.push_back(scene + "_" + level);
-    for (const auto& [name, ds] : simulateMissing(a, exe, data, runs)) {
-      const std::string group = name.substr(0, name.rfind("_s")), level = group.substr(group.rfind('_') + 1);
-      for (const auto& mode : modes)
-        jobs.push_back({name, group, level, mode, ds, ds + "/config/sim_stereo_imu_config.yaml",
-                        (runs / (name + "_" + mode)).string()});
-    }
-  }
-  runJobs(jobs, a, exe);
-
-  const Collected c = collect(jobs);
+/// Writes the tables, results.json, timing.json and plots of a sweep's results into `out`;
+/// prints the jobs without a result. Returns how many there are.
+std::size_t writeOutputs(const fs::path& out, const Sweep& sweep, const std::vector<JobResult>& found) {
+  const Collected c = collect(sweep, found);
   std::ofstream(out / "results.json") << c.results.dump(1) << "\n";
-  const std::string t1 = table1(c, modes, a.suite == "viode" ? "" : a.seeds, columns), t2 = table2(c, modes);
+  std::ofstream(out / "timing.json") << c.timing.dump(1) << "\n";
+  const std::string t1 = table1(c, sweep.modes, sweep.suite == "viode" ? "" : sweep.seeds, sweep.columns);
+  const std::string t2 = table2(c, sweep.modes);
   std::ofstream(out / "table1.md") << t1;
   std::ofstream(out / "table2.md") << t2;
   std::ofstream(out / "dynamic.md") << dynamicTable(c.results);
   plots(out);
-  std::printf("%s\n%s\nwrote %s/{table1.md,table2.md,dynamic.md,results.json,plots/}\n", t1.c_str(), t2.c_str(),
-              out.c_str());
-  return kOk;
+  std::printf("%s\n%s\nwrote %s/{table1.md,table2.md,dynamic.md,results.json,timing.json,plots/}\n", t1.c_str(),
+              t2.c_str(), out.c_str());
+  std::size_t problems = 0;
+  for (std::size_t k = 0; k < found.size(); ++k)
+    if (!found[k].problem.empty()) {
+      std::fprintf(stderr, "job %s: %s\n", sweep.jobs[k].name.c_str(), found[k].problem.c_str());
+      ++problems;
+    }
+  return problems;
+}
+
+/// The sweep's jobs (simulating the suite's missing datasets first: they are the jobs' inputs).
+Sweep planSweep(const BenchArgs& a, const std::string& exe, const fs::path& out) {
+  const fs::path data = a.data.empty() ? out / "data" : fs::absolute(a.data), runs = out / "runs";
+  std::error_code ec;
+  fs::create_directories(runs, ec);
+  fs::create_directories(data, ec);
+  if (ec) throw InputError(a.out, "cannot create folder: " + ec.message());
+  Sweep sw;
+  sw.suite = a.suite;
+  sw.seeds = a.suite == "viode" ? "" : a.seeds;
+  sw.commit = buildCommit();
+  sw.threads = a.run_threads;
+  sw.modes = {"baseline", "ransac", "seg", "idy"};
+  if (a.ablations) sw.modes.insert(sw.modes.end(), {"idy-pre", "idy-ba"});
+  if (!a.modes.empty()) sw.modes = parseModes(a.modes);
+  if (a.suite == "viode") {
+    sw.jobs = viodeJobs(a, data, out, sw.modes, sw.columns);
+  } else {
+    for (const auto& scene : kScenes)
+      for (const auto& level : kLevels) sw.columns.push_back(scene + "_" + level);
+    for (const auto& [name, ds] : simulateMissing(a, exe, data, runs)) {
+      const std::string group = name.substr(0, name.rfind("_s")), level = group.substr(group.rfind('_') + 1);
+      for (const auto& mode : sw.modes)
+        sw.jobs.push_back({name, group, level, mode, ds, ds + "/config/sim_stereo_imu_config.yaml", name + "_" + mode,
+                           "", ""});
+    }
+  }
+  checksumInputs(sw.jobs);
+  return sw;
+}
+
+int runBench(const BenchArgs& a) {
+  if (a.suite != "standard" && a.suite != "validation" && a.suite != "viode")
+    throw CLI::ValidationError("--suite", "expected standard, validation or viode, got '" + a.suite + "'");
+  if (a.suite == "viode" && a.data.empty()) throw CLI::ValidationError("--data", "the folder holding VIODE's bags");
+  if (a.out.empty()) throw CLI::ValidationError("--out", "the benchmark's output folder is required");
+  parseSeeds(a.seeds);  // usage errors before any work
+  if (!a.modes.empty()) parseModes(a.modes);
+  const std::string exe = self();
+  const fs::path out = fs::absolute(a.out);
+  const Sweep sweep = planSweep(a, exe, out);
+  writeSweep(out, sweep);
+  if (!a.plan.empty()) {
+    writePlan(a.plan, sweep, out, exe);
+    std::printf("wrote %s: %zu jobs, one shell command per line (run them with e.g. `parallel -j2 < %s`, or a Slurm "
+                "array: docs/cli.md#bench-as-independent-jobs), then: idyvins bench --collect %s\n",
+                a.plan.c_str(), sweep.jobs.size(), a.plan.c_str(), out.c_str());
+    return kOk;
+  }
+  runJobs(sweep.jobs, a, exe, out);
+  writeOutputs(out, sweep, findResults(sweep, {out}));
+  return kOk;  // failed runs are x in the tables, as before
+}
+
+/// bench --collect DIR...: the tables from the job folders under each DIR/runs (the first DIR's
+/// bench.json is the sweep; the others, shards of it, may hold a copy).
+int collectBench(const BenchArgs& a) {
+  std::vector<fs::path> dirs;
+  for (const std::string& d : a.collect) {
+    if (!fs::is_directory(d)) throw InputError(d, "no such folder");
+    dirs.push_back(fs::absolute(d));
+  }
+  const Sweep sweep = readSweep(dirs.front());
+  for (std::size_t k = 1; k < dirs.size(); ++k)
+    if (fs::exists(dirs[k] / "bench.json") && readSweep(dirs[k]).commit != sweep.commit)
+      throw InputError((dirs[k] / "bench.json").string(), "planned by another commit than " +
+                                                              (dirs.front() / "bench.json").string());
+  const fs::path out = a.out.empty() ? dirs.front() : fs::path(a.out);
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) throw InputError(out.string(), "cannot create folder: " + ec.message());
+  const std::size_t problems = writeOutputs(out, sweep, findResults(sweep, dirs));
+  if (problems == 0) return kOk;
+  std::fprintf(stderr, "%zu of %zu jobs have no result (x in the tables): run the plan again to complete them\n",
+               problems, sweep.jobs.size());
+  return kInputError;
 }
 
 }  // namespace
@@ -410,7 +456,7 @@ void registerBench(CLI::App& app, int& exit_code) {
   cmd->add_option("--config", a->config,
                   "viode: the config (its folder is copied per environment with that environment's vehicle\n"
                   "table; default: the source tree's config/viode/viode_stereo_imu_config.yaml)");
-  cmd->add_option("-o,--out", a->out, "output folder")->required();
+  cmd->add_option("-o,--out", a->out, "output folder (required, except with --collect)");
   cmd->add_option("--seeds", a->seeds, "comma-separated seeds (default 1)");
   cmd->add_option("--duration", a->duration, "seconds per sequence (default 60)");
   cmd->add_option("--realism", a->realism,
@@ -428,7 +474,17 @@ void registerBench(CLI::App& app, int& exit_code) {
   cmd->add_flag("--reuse-runs", a->reuse_runs,
                 "keep runs that already have OUT/runs/<sequence>_<mode>/stats.json (resume an interrupted\n"
                 "benchmark, or re-run only the modes whose run folders were deleted)");
-  cmd->callback([a, &exit_code] { exit_code = runBench(*a); });
+  cmd->add_option("--plan", a->plan,
+                  "write the sweep as independent jobs to this file instead of running them: one shell command per\n"
+                  "line (each skips itself when its run folder is finished), the job's name and its inputs' checksums\n"
+                  "in a trailing comment; OUT/bench.json describes the sweep. Missing datasets are simulated first.\n"
+                  "Run the lines anywhere (GNU parallel, a Slurm array, a Kubernetes Indexed Job), then --collect");
+  cmd->add_option("--collect", a->collect,
+                  "DIR...: write the tables, results.json and plots of a planned sweep from the finished job folders\n"
+                  "under each DIR/runs (the first DIR holds bench.json; --out defaults to it). Refuses runs of another\n"
+                  "commit or config; names jobs without a result and exits 1")
+      ->expected(1, -1);
+  cmd->callback([a, &exit_code] { exit_code = a->collect.empty() ? runBench(*a) : collectBench(*a); });
 }
 
 }  // namespace idyvins::app

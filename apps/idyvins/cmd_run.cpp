@@ -13,6 +13,8 @@
 
 #include "commands.h"
 #include "input.h"
+#include "core/build_info.h"
+#include "core/checksum.h"
 #include "core/error.h"
 #include "io/bag_dataset.h"
 #include "io/config.h"
@@ -245,6 +247,8 @@ int runRun(const RunArgs& a) {
   summary["threads"] = system.threads();
   summary["feedback_delay"] = system.runOptions().feedback_delay;
   summary["unpaired_images"] = {{"cam0", in.unpaired_cam0}, {"cam1", in.unpaired_cam1}};
+  summary["build"] = {{"commit", buildCommit()}};
+  summary["config_fnv1a64"] = configChecksum(config);
   const int sig = g_stop_signal;
   summary["partial"] = sig != 0;  // stopped by a signal: the frames before it only
   if (sig != 0) summary["stopped_by"] = sig == SIGINT ? "SIGINT" : "SIGTERM";
@@ -268,6 +272,12 @@ int runRun(const RunArgs& a) {
 }
 
 }  // namespace
+
+std::string configChecksum(const Config& config) {
+  std::uint64_t h = fnv1a64File(config.path);
+  for (const std::string& cam : config.cam_paths) h = fnv1a64File(cam, h);
+  return hex64(h);
+}
 
 void registerRun(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<RunArgs>();

@@ -3,6 +3,9 @@
 // and returns its exit code through the callback it installs.
 
 #include <CLI/CLI.hpp>
+#include <string>
+
+#include "io/config.h"
 
 namespace idyvins::app {
 
@@ -23,6 +26,9 @@ void registerTrack(CLI::App& app, int& exit_code);
 
 /// `idyvins run --config CFG --dataset DIR --out OUT [--mode ...]`.
 void registerRun(CLI::App& app, int& exit_code);
+/// FNV-1a 64 (hex) of a config file and its camera files, in that order: stats.json's
+/// config_fnv1a64, and what bench --plan / --collect compare. Throws InputError.
+std::string configChecksum(const Config& config);
 
 /// `idyvins convert BAG OUT [--config CFG] [--groundtruth-topic T]`.
 void registerConvert(CLI::App& app, int& exit_code);

@@ -20,6 +20,14 @@ LEVELS = ["none", "low", "mid", "high"]
 MODES = ["baseline", "ransac", "seg", "idy", "idy-pre", "idy-ba"]
 
 
+def merge(summary, timing):
+    for k, v in timing.items():
+        if isinstance(v, dict):
+            merge(summary.setdefault(k, {}), v)
+        else:
+            summary[k] = v
+
+
 def load(out):
     path = os.path.join(out, "results.json")
     try:
@@ -27,9 +35,15 @@ def load(out):
             results = json.load(f)
     except (OSError, ValueError) as e:
         sys.exit(f"{path}: cannot read the benchmark's results ({e})")
+    # Timing (wall time, "..._ms") lives in timing.json beside results.json since bench --plan.
+    timing = {}
+    if os.path.exists(os.path.join(out, "timing.json")):
+        timing = {(t["sequence"], t["mode"]): t["timing"] for t in json.load(open(os.path.join(out, "timing.json")))}
     runs = {}
     for r in results:
         seq, mode, s = r["sequence"], r["mode"], r.get("summary")
+        if isinstance(s, dict):
+            merge(s, timing.get((seq, mode), {}))
         key, seed = seq.rsplit("_s", 1)
         runs[(key, int(seed), mode)] = s if isinstance(s, dict) else None
     return runs

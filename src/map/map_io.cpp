@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "core/checksum.h"
 #include "core/error.h"
 
 namespace idyvins::map {
@@ -16,12 +17,6 @@ namespace {
 namespace fs = std::filesystem;
 constexpr char kMagic[8] = {'I', 'D', 'Y', 'M', 'A', 'P', 'K', 'F'};
 constexpr const char* kFormat = "idyvins-map";
-
-std::uint64_t fnv1a(const std::string& bytes) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : bytes) h = (h ^ c) * 1099511628211ull;
-  return h;
-}
 
 /// Appends little-endian values (the machines idyvins builds for are little-endian).
 class Writer {
@@ -203,7 +198,7 @@ void saveMap(const std::string& dir, const SavedMap& map) {
   const nlohmann::json header = {{"format", kFormat},         {"version", kMapFormatVersion},
                                  {"keyframes", map.keyframes.size()}, {"landmarks", landmarks},
                                  {"loops", map.loops.size()}, {"descriptor_bits", 256},
-                                 {"keyframes_fnv1a64", std::to_string(fnv1a(w.bytes()))},
+                                 {"keyframes_fnv1a64", std::to_string(fnv1a64(w.bytes()))},
                                  {"rig", map.rig}};
   writeAtomically(fs::path(dir) / "keyframes.bin", w.bytes());
   writeAtomically(fs::path(dir) / "loops.csv", loops.str());
@@ -225,7 +220,7 @@ SavedMap loadMap(const std::string& dir) {
                                              std::to_string(kMapFormatVersion));
   const fs::path bin_path = fs::path(dir) / "keyframes.bin";
   const std::string bytes = readWhole(bin_path);
-  if (std::to_string(fnv1a(bytes)) != header.value("keyframes_fnv1a64", ""))
+  if (std::to_string(fnv1a64(bytes)) != header.value("keyframes_fnv1a64", ""))
     throw InputError(bin_path.string(), "checksum differs from map.json's (damaged or replaced)");
   Reader r(bytes, bin_path.string());
   for (char c : kMagic)
