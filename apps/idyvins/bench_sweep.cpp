@@ -17,8 +17,6 @@ namespace {
 constexpr const char* kFormat = "idyvins-bench";
 constexpr int kVersion = 1;
 
-std::string quote(const std::string& s) { return "'" + s + "'"; }
-
 bool isTiming(const std::string& key) {
   const bool ms = (key.size() > 3 && key.compare(key.size() - 3, 3, "_ms") == 0) || key.find("_ms_") != std::string::npos;
   return ms || key == "wall_s" || key == "realtime_factor";
@@ -52,6 +50,8 @@ std::string whyMissing(const fs::path& dir, const std::string& name) {
 }
 
 }  // namespace
+
+std::string quote(const std::string& s) { return "'" + s + "'"; }
 
 std::string datasetChecksum(const std::string& path) {
   if (fs::is_regular_file(path)) return hex64(fnv1a64File(path));
@@ -141,8 +141,8 @@ std::vector<JobResult> findResults(const Sweep& s, const std::vector<fs::path>& 
       break;
     }
     if (r.summary.is_null()) {
-      r.problem = dirs.empty() ? "missing" : whyMissing(dirs.front(), j.name);
-      for (std::size_t k = 1; k < dirs.size() && r.problem == "missing"; ++k) r.problem = whyMissing(dirs[k], j.name);
+      r.problem = "missing";
+      for (std::size_t k = 0; k < dirs.size() && r.problem == "missing"; ++k) r.problem = whyMissing(dirs[k], j.name);
     } else {
       const std::string commit = r.summary.contains("build") ? r.summary["build"].value("commit", "") : "";
       if (commit != s.commit)

@@ -24,6 +24,9 @@ struct Sweep {
   std::vector<Job> jobs;
 };
 
+/// `s` in single quotes, for the shell commands bench writes and runs.
+std::string quote(const std::string& s);
+
 /// FNV-1a 64 (hex) of a dataset: a bag's every byte; a folder's index files (meta.json, the IMU,
 /// both cameras' and the ground truth's data.csv, those present). Throws InputError.
 std::string datasetChecksum(const std::string& path);

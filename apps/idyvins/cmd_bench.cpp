@@ -48,7 +48,6 @@ std::string self() {
   return buf;
 }
 
-std::string quote(const std::string& s) { return "'" + s + "'"; }
 
 /// ATE, or NaN for a failure (no output, not initialized, or ATE > 10 % of the path: diverged).
 double ateOf(const nlohmann::json& s) {
