@@ -28,7 +28,7 @@ struct VerifyOptions {
   /// A loop's PnP position uncertainty (worst axis, 1 sigma; positionSigma with 1 px noise and
   /// stereo-only depth, so it overstates) above this is refused: far landmarks leave the
   /// translation loose (docs/loop-closure.md#measured).
-  double max_sigma_position_m = 0.5;
+  double max_sigma_position_m = 0.35;
   double stereo_baseline_m = 0.11;  ///< depth uncertainty of the stored landmarks (set from the rig)
 };
 
