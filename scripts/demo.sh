@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The showcase: simulate a 20 s `city high` sequence (generated once, cached in
 # data_sim/), run `baseline` and `idy` on it, and print both side by side:
-# trajectory error, dynamic-feature statistics, maps. Outputs in out/demo/.
+# trajectory error, dynamic-feature statistics, maps; then write their report page
+# (idyvins report). Outputs in out/demo/.
 set -euo pipefail
 BUILD=${1:-build}
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -36,4 +37,7 @@ for m, ate, path, mov, sta, smap, smov, dmap, opt, dyn in rows:
           f"{dmap:12d} {opt:7.1f} {dyn:7.3f}")
 PY
 echo
+"$BIN" report "$OUT/baseline" "$OUT/idy" --html "$OUT/report.html"
+echo
 echo "Trajectories (TUM, EuRoC CSV), stats.json and PLY maps are in $OUT/{baseline,idy}/."
+echo "Open the report (offline, one file): $OUT/report.html"

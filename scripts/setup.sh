@@ -22,6 +22,8 @@ PACKAGES=(
   clang libclang-rt-14-dev
   # bench --plan: the GNU parallel recipe and its test
   parallel
+  # idyvins report's browser test (headless, driven by playwright-core from web/)
+  chromium
 )
 
 missing=()
@@ -31,8 +33,23 @@ for p in "${PACKAGES[@]}"; do
   fi
 done
 
+# The report page's libraries (three.js, uPlot) and build/test tools (esbuild, playwright-core)
+# come from the npm registry into web/node_modules, pinned by web/package-lock.json; the build
+# bundles them into the idyvins binary. Node.js and npm: the machine's, else Debian's.
+web_modules() {
+  local web
+  web="$(cd "$(dirname "$0")/.." && pwd)/web"
+  if [ -f "$web/node_modules/.package-lock.json" ] && [ ! "$web/package-lock.json" -nt "$web/node_modules/.package-lock.json" ]; then
+    return 0
+  fi
+  echo "setup: npm ci in $web"
+  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error)
+}
+if ! command -v npm > /dev/null; then missing+=(nodejs npm); fi
+
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#PACKAGES[@]} Debian packages already installed"
+  web_modules
   exit 0
 fi
 
@@ -42,4 +59,5 @@ echo "setup: installing ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+web_modules
 echo "setup: done"

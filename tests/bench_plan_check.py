@@ -82,6 +82,11 @@ def main(idy, work, src):
     same = open(os.path.join(local, "results.json"), "rb").read() == open(os.path.join(sharded, "results.json"),
                                                                           "rb").read()
     check(r.returncode == 0 and same, "results.json of the sharded and the local bench byte-identical")
+    for where in (local, sharded):  # the suite page and one page per sequence, from --collect too
+        pages = sorted(os.listdir(os.path.join(where, "pages"))) if os.path.isdir(os.path.join(where, "pages")) else []
+        suite_page = open(os.path.join(where, "report.html")).read() if os.path.exists(os.path.join(where, "report.html")) else ""
+        check(len(pages) == 8 and "Table I" in suite_page and all('href="pages/%s"' % p in suite_page for p in pages),
+              "%s: report.html links %d sequence pages" % (os.path.basename(where), len(pages)))
     refusals(idy, sharded)
     return 1 if failures else 0
 

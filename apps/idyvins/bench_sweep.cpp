@@ -51,7 +51,17 @@ std::string whyMissing(const fs::path& dir, const std::string& name) {
 
 }  // namespace
 
-std::string quote(const std::string& s) { return "'" + s + "'"; }
+std::string quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string shellQuote(const std::string& word) {
+  const bool plain = !word.empty() && word.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                                              "0123456789_-./=:,+@%") == std::string::npos;
+  return plain ? word : quote(word);
+}
 
 std::string datasetChecksum(const std::string& path) {
   if (fs::is_regular_file(path)) return hex64(fnv1a64File(path));

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <thread>
 
+#include "bench_page.h"
 #include "bench_sweep.h"
 #include "commands.h"
 #include "core/build_info.h"
@@ -346,10 +347,12 @@ std::size_t writeOutputs(const fs::path& out, const Sweep& sweep, const std::vec
   const std::string t2 = table2(c, sweep.modes);
   std::ofstream(out / "table1.md") << t1;
   std::ofstream(out / "table2.md") << t2;
-  std::ofstream(out / "dynamic.md") << dynamicTable(c.results);
+  const std::string td = dynamicTable(c.results);
+  std::ofstream(out / "dynamic.md") << td;
   plots(out);
-  std::printf("%s\n%s\nwrote %s/{table1.md,table2.md,dynamic.md,results.json,timing.json,plots/}\n", t1.c_str(),
-              t2.c_str(), out.c_str());
+  writeBenchPages(out, sweep, found, {t1, t2, td});
+  std::printf("%s\n%s\nwrote %s/{table1.md,table2.md,dynamic.md,results.json,timing.json,plots/,report.html,pages/}\n",
+              t1.c_str(), t2.c_str(), out.c_str());
   std::size_t problems = 0;
   for (std::size_t k = 0; k < found.size(); ++k)
     if (!found[k].problem.empty()) {

@@ -19,6 +19,7 @@
 #include "io/bag_dataset.h"
 #include "io/config.h"
 #include "io/data_source.h"
+#include "io/trajectory_io.h"
 #include "pipeline/observers.h"
 #include "pipeline/outputs.h"
 #include "pipeline/system.h"
@@ -30,6 +31,7 @@ namespace {
 
 struct RunArgs {
   std::string config, dataset, out, mode, dump_observations, groundtruth_topic, save_map, load_map;
+  std::string command_line;  ///< as typed (run.json)
   std::size_t max_frames = 0;
   bool solver_time_limit = false, localization_only = false;
   int threads = 2, feedback_delay = -1;
@@ -181,8 +183,9 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
                 100 * c["moving_detected_fraction"].get<double>(), 100 * c["static_flagged_fraction"].get<double>(),
                 100 * c["static_map_fraction_on_moving"].get<double>());
   std::printf("wrote %s/trajectory.tum, trajectory.csv, state.csv, stats.json, resets.csv, map_static.ply, map_dynamic.ply, "
-              "map_all.ply%s\n",
-              out.c_str(), s["loop_closure"].is_null() ? "" : ", trajectory_loop.tum, loops.csv, map_static_loop.ply");
+              "map_all.ply, run.json%s%s (idyvins report %s: the run as a page)\n",
+              out.c_str(), s.contains("ate_rmse_m") ? ", groundtruth.tum" : "",
+              s["loop_closure"].is_null() ? "" : ", trajectory_loop.tum, loops.csv, map_static_loop.ply", out.c_str());
 }
 
 pipeline::System makeSystem(const RunArgs& a, Config& config) {
@@ -220,6 +223,35 @@ struct StatsFile {
   std::ofstream file;
   pipeline::StatsRecorder recorder;
 };
+
+/// OUT/run.json (how the run was made, for `idyvins report`) and OUT/groundtruth.tum (the
+/// reference poses from 1 s before the first to 1 s after the last estimate, when there are any).
+void writeRunRecord(const std::string& dir, const RunArgs& a, const Config& config,
+                    const std::vector<StampedPose>& gt, const pipeline::Result& result) {
+  const auto text = [](const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw InputError(path, "cannot read file");
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  nlohmann::json files = nlohmann::json::array();
+  files.push_back({{"path", config.path}, {"text", text(config.path)}});
+  for (const std::string& cam : config.cam_paths) files.push_back({{"path", cam}, {"text", text(cam)}});
+  std::error_code ec;
+  const nlohmann::json record = {{"command", a.command_line},
+                                 {"cwd", std::filesystem::current_path(ec).string()},
+                                 {"dataset", a.dataset},
+                                 {"config_files", files},
+                                 {"build", {{"commit", buildCommit()}}}};
+  std::ofstream out(dir + "/run.json");
+  out << record.dump(1) << "\n";
+  if (!out) throw InputError(dir + "/run.json", "write failed");
+  if (gt.empty() || result.trajectory.empty()) return;
+  const TimeNs from = result.trajectory.front().t_ns - 1'000'000'000, to = result.trajectory.back().t_ns + 1'000'000'000;
+  std::vector<StampedPose> span;
+  for (const StampedPose& p : gt)
+    if (p.t_ns >= from && p.t_ns <= to) span.push_back(p);
+  if (!span.empty()) io::writeTum(dir + "/groundtruth.tum", span);
+}
 
 int runRun(const RunArgs& a) {
   Config config;
@@ -261,6 +293,7 @@ int runRun(const RunArgs& a) {
     map::saveMap(a.save_map, saved);
   }
   pipeline::addAte(summary, in.groundtruth, result);
+  writeRunRecord(folder.path(), a, config, in.groundtruth, result);
   stats.finish(summary);
   folder.publish();
   summary["last_status"] = result.summary.last_status;
@@ -279,7 +312,7 @@ std::string configChecksum(const Config& config) {
   return hex64(h);
 }
 
-void registerRun(CLI::App& app, int& exit_code) {
+void registerRun(CLI::App& app, int& exit_code, const std::string& command_line) {
   auto a = std::make_shared<RunArgs>();
   CLI::App* cmd = app.add_subcommand(
       "run",
@@ -287,6 +320,8 @@ void registerRun(CLI::App& app, int& exit_code) {
       "sliding-window estimator. Writes OUT/trajectory.tum (TUM), OUT/trajectory.csv (EuRoC),\n"
       "OUT/state.csv (pose, velocity, biases; EuRoC ground-truth columns)\n"
       "OUT/stats.json (per-frame timing, feature counts, status, resets), OUT/resets.csv, and the maps as PLY;\n"
+      "OUT/run.json (the command, its folder, the config files' text: what `idyvins report` shows) and,\n"
+      "when the dataset has ground truth, OUT/groundtruth.tum (its poses over the run's time span);\n"
       "with the config's loop_closure: 1 also OUT/trajectory_loop.tum (every pose corrected by the final\n"
       "4-DoF pose graph), OUT/loops.csv (each loop closed) and OUT/map_static_loop.ply (the static\n"
       "landmarks of the loop closer's keyframes, moved with the corrected poses).\n"
@@ -330,7 +365,10 @@ void registerRun(CLI::App& app, int& exit_code) {
                "results then depend on the machine's load). Same as solver_time_limit: 1 in the config");
   cmd->add_option("--dump-observations", a->dump_observations,
                   "write one CSV row per tracked observation (front-end label, d_s, stereo-test chi2, ground-truth mask, final fate)");
-  cmd->callback([a, &exit_code] { exit_code = runRun(*a); });
+  cmd->callback([a, &exit_code, &command_line] {
+    a->command_line = command_line;
+    exit_code = runRun(*a);
+  });
 }
 
 }  // namespace idyvins::app

@@ -24,8 +24,15 @@ void registerEval(CLI::App& app, int& exit_code);
 /// `idyvins track --config CFG --dataset DIR [--mode ...] [--save-tracks DIR]`.
 void registerTrack(CLI::App& app, int& exit_code);
 
-/// `idyvins run --config CFG --dataset DIR --out OUT [--mode ...]`.
-void registerRun(CLI::App& app, int& exit_code);
+/// `idyvins run --config CFG --dataset DIR --out OUT [--mode ...]`; `command_line` (filled before
+/// parsing) goes into OUT/run.json.
+void registerRun(CLI::App& app, int& exit_code, const std::string& command_line);
+
+/// `idyvins report OUT [OUT2 ...] [--html FILE]`: one offline HTML page of one or several runs.
+void registerReport(CLI::App& app, int& exit_code);
+
+/// A word as a POSIX shell reads it back (single quotes where needed).
+std::string shellQuote(const std::string& word);
 /// FNV-1a 64 (hex) of a config file and its camera files, in that order: stats.json's
 /// config_fnv1a64, and what bench --plan / --collect compare. Throws InputError.
 std::string configChecksum(const Config& config);

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include "commands.h"
 #include "core/allocator.h"
@@ -19,11 +20,14 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "idyvins 0.1.0");
   int exit_code = kOk;
+  std::string command_line;  // as typed, for run.json (shell-quoted where needed)
+  for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + shellQuote(argv[i]);
   registerInfo(app, exit_code);
   registerSimulate(app, exit_code);
   registerEval(app, exit_code);
   registerTrack(app, exit_code);
-  registerRun(app, exit_code);
+  registerRun(app, exit_code, command_line);
+  registerReport(app, exit_code);
   registerConvert(app, exit_code);
   registerBench(app, exit_code);
   registerPerturb(app, exit_code);

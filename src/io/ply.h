@@ -22,4 +22,9 @@ int plyLabel(FeatureLabel label);
 /// eliminated red, confirmed dynamic orange). Throws InputError if unwritable.
 void writePly(const std::string& path, const std::vector<LabelledPoint>& points);
 
+/// Reads a PLY that writePly wrote (ASCII; x y z label red green blue). Throws InputError with
+/// the file and line on anything else: another format, a short or malformed vertex line, a label
+/// outside 0..2, fewer or more vertices than the header says.
+std::vector<LabelledPoint> readPly(const std::string& path);
+
 }  // namespace idyvins::io
