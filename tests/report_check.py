@@ -10,6 +10,7 @@
    and says why it has no ground-truth panels.
 3. Damaged and missing run files, runs of two sequences: one clear line each, exit 1, no page.
 """
+import json
 import os
 import shutil
 import subprocess
@@ -50,6 +51,10 @@ for mode in ("baseline", "idy"):
     check(r.returncode == 0 and os.path.exists(os.path.join(out, "run.json")) and
           os.path.exists(os.path.join(out, "groundtruth.tum")), f"run {mode} writes run.json and groundtruth.tum")
     runs.append(out)
+    ghosts = os.path.join(out, "map_static_on_moving.ply")
+    n = int(next(l.split()[2] for l in open(ghosts) if l.startswith("element vertex"))) if os.path.exists(ghosts) else -1
+    want = json.load(open(os.path.join(out, "stats.json")))["summary"]["classification"]["static_map_points_on_moving"]
+    check(n == want, f"{mode}: map_static_on_moving.ply holds the {want} static-map points on moving objects ({n})")
 page = os.path.join(work, "report.html")
 r = run("report", *runs, "--html", page)
 check(r.returncode == 0 and os.path.exists(page), "report of baseline and idy: " + r.stdout.strip() + r.stderr)

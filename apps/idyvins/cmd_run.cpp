@@ -19,6 +19,7 @@
 #include "io/bag_dataset.h"
 #include "io/config.h"
 #include "io/data_source.h"
+#include "io/ply.h"
 #include "io/trajectory_io.h"
 #include "pipeline/observers.h"
 #include "pipeline/outputs.h"
@@ -287,6 +288,11 @@ int runRun(const RunArgs& a) {
   if (in.has_masks) summary["classification"] = pipeline::toJson(observations.classify(result));
   if (!a.dump_observations.empty()) observations.writeCsv(a.dump_observations, result);
   pipeline::writeResultFiles(folder.path(), result);
+  if (in.has_masks) {  // the static map's points on moving objects, for the report's ghost layer
+    std::vector<io::LabelledPoint> ghosts;
+    for (const auto& p : observations.staticMapOnMoving(result)) ghosts.push_back({p.p_w, 0});
+    io::writePly(folder.path() + "/map_static_on_moving.ply", ghosts);
+  }
   if (!a.save_map.empty()) {
     map::SavedMap saved = system.loopCloser()->savedMap();
     saved.rig = pipeline::rigFingerprint(config);

@@ -140,14 +140,17 @@ nlohmann::json mapLayers(const std::string& dir, const eval::Similarity& align, 
   pts.insert(pts.end(), dyn.begin(), dyn.end());
   std::vector<io::LabelledPoint> loop_pts;
   if (loop_align && fs::exists(dir + "/map_static_loop.ply")) loop_pts = io::readPly(dir + "/map_static_loop.ply");
+  std::vector<io::LabelledPoint> ghosts;  // static-map points on moving objects (run with masks)
+  if (fs::exists(dir + "/map_static_on_moving.ply")) ghosts = io::readPly(dir + "/map_static_on_moving.ply");
   const std::size_t total = pts.size() + loop_pts.size();
   const std::size_t stride = std::max<std::size_t>(1, (total + o.max_map_points - 1) / o.max_map_points);
   nlohmann::json layers = {{"static", nlohmann::json::array()}, {"eliminated", nlohmann::json::array()},
-                           {"confirmed", nlohmann::json::array()}, {"static_loop", nlohmann::json::array()}};
+                           {"confirmed", nlohmann::json::array()}, {"static_loop", nlohmann::json::array()},
+                           {"ghosts", nlohmann::json::array()}};
   static const char* const names[] = {"static", "eliminated", "confirmed"};
-  const auto add = [&](const std::vector<io::LabelledPoint>& v, bool is_loop) {
+  const auto add = [&](const std::vector<io::LabelledPoint>& v, bool is_loop, const char* name = nullptr) {
     for (std::size_t i = 0; i < v.size(); i += stride) {
-      nlohmann::json& layer = layers[is_loop ? "static_loop" : names[v[i].label]];
+      nlohmann::json& layer = layers[name ? name : is_loop ? "static_loop" : names[v[i].label]];
       const Eigen::Vector3d q = is_loop ? loop_align->apply(v[i].p) : align.apply(v[i].p);
       layer.push_back(round3(q.x()));
       layer.push_back(round3(q.y()));
@@ -156,6 +159,7 @@ nlohmann::json mapLayers(const std::string& dir, const eval::Similarity& align, 
   };
   add(pts, false);
   add(loop_pts, true);
+  add(ghosts, false, "ghosts");
   layers["points_total"] = total;
   layers["stride"] = stride;
   return layers;

@@ -64,6 +64,16 @@ eval::DynamicClassification ObservationRecorder::classify(const Result& result) 
   return eval::classifyTracks(tracks_, confirmedIds(result), static_ids);
 }
 
+std::vector<backend::MapPoint> ObservationRecorder::staticMapOnMoving(const Result& result) const {
+  std::vector<backend::MapPoint> out;
+  if (!has_masks_) return out;
+  for (const auto& p : result.static_map) {
+    const auto it = tracks_.find(p.id);
+    if (it != tracks_.end() && 2 * it->second.on_moving > it->second.observations) out.push_back(p);
+  }
+  return out;
+}
+
 void ObservationRecorder::writeCsv(const std::string& path, const Result& result) {
   if (!keep_observations_) throw std::logic_error("ObservationRecorder::writeCsv needs keep_observations");
   relabelLostMoving();

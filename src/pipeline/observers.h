@@ -29,6 +29,9 @@ class ObservationRecorder final : public FrameObserver {
 
   /// Classification and map cleanliness against the masks, with the run's final maps.
   eval::DynamicClassification classify(const Result& result);
+  /// The static map's "ghosts": its points whose track was mostly on moving objects by the masks
+  /// (what classify counts as static_map_points_on_moving). Empty without masks.
+  std::vector<backend::MapPoint> staticMapOnMoving(const Result& result) const;
   /// One CSV row per observation: front-end label, d_s, Σ, stereo χ², mask verdict, and the
   /// landmark's fate (confirmed dynamic, in the static map, ever removed as an outlier).
   /// Needs `keep_observations`; throws InputError if the file cannot be written.

@@ -8,6 +8,7 @@ export const LAYERS = [
   { key: 'static', label: 'static map', color: 0x8a8a8a, size: 2 },
   { key: 'eliminated', label: 'eliminated (dynamic)', color: 0xe61e1e, size: 2.5 },
   { key: 'confirmed', label: 'confirmed dynamic', color: 0xff9600, size: 2.5 },
+  { key: 'ghosts', label: 'static map on moving objects (ghosts, by the masks)', color: 0xc000c0, size: 4 },
   { key: 'static_loop', label: 'static map, loop-corrected', color: 0x7b3fbf, size: 2 },
   { key: 'est', label: 'trajectory', color: 0x1f77b4, line: true },
   { key: 'gt', label: 'ground truth', color: 0x111111, line: true },

@@ -112,13 +112,13 @@ function mapSection() {
   s.append(row);
   const width = runs.length > 1 ? 560 : 900;
   runs.forEach((r, i) => {
-    const box = el('figure', { class: 'viewer' }, el('figcaption', { style: `color:${color(i)}`, text: `${r.name} (${r.summary.mode})` }));
+    const box = el('figure', { class: 'viewer', style: `width:${width}px` }, el('figcaption', { style: `color:${color(i)}`, text: `${r.name} (${r.summary.mode})` }));
     row.append(box);
     try {
       const v = createViewer(box, r, width, 420);
       window.idyReport.viewers.push(v);
       const m = r.maps;
-      box.append(el('p', { class: 'note', text: `${m.points_total} map points${m.stride > 1 ? `, every ${m.stride}th shown` : ''}: ${m.static.length / 3} static, ${m.eliminated.length / 3} eliminated, ${m.confirmed.length / 3} confirmed dynamic${m.static_loop.length ? `, ${m.static_loop.length / 3} loop-corrected static` : ''}.` }));
+      box.append(el('p', { class: 'note', text: `${m.points_total} map points${m.stride > 1 ? `, every ${m.stride}th shown` : ''}: ${m.static.length / 3} static (${m.ghosts.length / 3} of them on moving objects), ${m.eliminated.length / 3} eliminated, ${m.confirmed.length / 3} confirmed dynamic${m.static_loop.length ? `, ${m.static_loop.length / 3} loop-corrected static` : ''}.` }));
     } catch (e) {
       box.append(el('p', { class: 'missing', text: `No 3D view: this browser gave no WebGL context (${e.message}).` }));
     }
@@ -131,7 +131,7 @@ function mapSection() {
     toggles.append(el('label', { style: `border-color:#${layer.color.toString(16).padStart(6, '0')}` }, box, ` ${layer.label}`));
   }
   if (runs.some((r) => r.summary.mode === 'baseline'))
-    s.append(el('p', { class: 'note', text: 'The baseline keeps every landmark in its static map, those on moving vehicles too (the "ghosts"); idy eliminates them (red) or confirms them dynamic (orange) and keeps them out.' }));
+    s.append(el('p', { class: 'note', text: 'The baseline keeps every landmark in its static map, those on moving vehicles too: the "ghosts" (magenta: static-map points whose track was mostly on moving objects by the ground-truth masks). idy eliminates such features (red) or confirms them dynamic (orange) and keeps them out of its static map.' }));
 }
 
 function dynamicSection() {
