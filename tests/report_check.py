@@ -6,8 +6,8 @@
 1. A short simulated city sequence with traffic, run in baseline and idy; their report opened in
    headless Chromium by tests/report/browser_test.mjs (no console errors, the 3D views drew, the
    dynamic layers toggle, numbers equal stats.json); screenshots saved under WORK/screens/.
-2. The real EuRoC excerpt with its ground truth left out (a folder of links): the page renders
-   and says why it has no ground-truth panels.
+2. The real EuRoC excerpt (it has no ground truth): the page renders and says why it has no
+   ground-truth panels; a run folder without groundtruth.tum given `--groundtruth DATASET`.
 3. Damaged and missing run files, runs of two sequences: one clear line each, exit 1, no page.
 """
 import json
@@ -65,7 +65,7 @@ screens = os.path.join(work, "screens")
 os.makedirs(screens)
 check(browser(page, runs, os.path.join(screens, "demo_")), "browser checks of the simulated runs' page")
 
-# 2. a run without ground truth: the EuRoC excerpt with its ground-truth folder left out
+# 2. a run without ground truth: the EuRoC excerpt (its state_groundtruth_estimate0 holds no data.csv)
 euroc = os.path.join(work, "euroc_no_gt")
 os.makedirs(os.path.join(euroc, "mav0"))
 for part in ("cam0", "cam1", "imu0", "body.yaml"):
@@ -77,6 +77,19 @@ r = run("report", out)
 check(r.returncode == 0 and os.path.exists(os.path.join(out, "report.html")), "report without --html writes OUT/report.html")
 check(browser(os.path.join(out, "report.html"), [out], os.path.join(screens, "euroc_no_gt_"), "--no-gt"),
       "browser checks of the page without ground truth")
+
+# ... and a run folder without groundtruth.tum given the dataset's ground truth on the command line
+bare = os.path.join(work, "baseline_bare")
+shutil.copytree(runs[0], bare)
+os.remove(os.path.join(bare, "groundtruth.tum"))
+page_gt = os.path.join(work, "bare_gt.html")
+r = run("report", bare, "--html", page_gt, "--groundtruth", seq)
+data = json.loads(open(page_gt).read().split('id="idy-data" type="application/json">')[1].split("</script>")[0]) if r.returncode == 0 else {}
+run0 = (data.get("runs") or [{}])[0]
+want = json.load(open(os.path.join(runs[0], "stats.json")))["summary"]["ate_rmse_m"]
+got = run0.get("ate_stats", {}).get("rmse", -1)
+check(r.returncode == 0 and abs(got - want) < 1e-9 and "gt_note" not in run0,
+      f"report --groundtruth DATASET: ATE {got} (stats.json {want})")
 
 # 3. missing and damaged files: one line naming the file (and line), exit 1, no page
 def broken(name, damage, expect):

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "input.h"
 #include "core/error.h"
 #include "eval/trajectory_metrics.h"
 #include "io/trajectory_io.h"
@@ -19,18 +20,6 @@ struct EvalArgs {
   double max_dt = 0.01;
   bool json = false;
 };
-
-/// A trajectory file, or a EuRoC folder's ground truth.
-std::vector<StampedPose> readReference(const std::string& path) {
-  namespace fs = std::filesystem;
-  if (fs::is_directory(path)) {
-    for (const fs::path& p : {fs::path(path) / "mav0/state_groundtruth_estimate0/data.csv",
-                             fs::path(path) / "state_groundtruth_estimate0/data.csv"})
-      if (fs::is_regular_file(p)) return io::readEurocCsv(p.string());
-    throw InputError(path, "folder holds no mav0/state_groundtruth_estimate0/data.csv");
-  }
-  return io::readTrajectory(path);
-}
 
 nlohmann::json statsJson(const eval::ErrorStats& s) {
   return {{"n", s.n},       {"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median},

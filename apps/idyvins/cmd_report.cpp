@@ -15,13 +15,14 @@ namespace {
 
 struct ReportArgs {
   std::vector<std::string> runs;
-  std::string html;
+  std::string html, groundtruth;
   std::size_t max_points = ReportOptions{}.max_map_points;
 };
 
 int runReport(const ReportArgs& a) {
   ReportOptions options;
   options.max_map_points = a.max_points;
+  options.groundtruth = a.groundtruth;
   const nlohmann::json data = reportData(a.runs, options);
   const std::string html = a.html.empty() ? (std::filesystem::path(a.runs.front()) / "report.html").string() : a.html;
   const std::string page = reportHtml(data);
@@ -55,6 +56,8 @@ void registerReport(CLI::App& app, int& exit_code) {
       "says so in place of those panels. docs/report.md.");
   cmd->add_option("runs", a->runs, "run folders (OUT of idyvins run), same sequence")->required();
   cmd->add_option("--html", a->html, "page to write (default: FIRST_RUN/report.html)");
+  cmd->add_option("--groundtruth", a->groundtruth,
+                  "ground truth for runs without OUT/groundtruth.tum: a TUM or EuRoC CSV file or a EuRoC folder");
   cmd->add_option("--max-map-points", a->max_points,
                   "map points per run on the page; larger maps are thinned evenly (the page says so)")
       ->check(CLI::Range(std::size_t{1000}, std::size_t{20'000'000}));

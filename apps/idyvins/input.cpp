@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "io/bag_dataset.h"
 #include "io/euroc_dataset.h"
+#include "io/trajectory_io.h"
 #include "pipeline/modes.h"
 
 namespace idyvins::app {
@@ -40,6 +41,18 @@ Input openInput(const std::string& dataset, const Config& config, const std::str
     throw InputError(ds.root, "mode seg needs mav0/cam0/mask/ (ground-truth masks)");
   in.source = std::make_unique<io::EurocSource>(std::move(ds), config.image_width, config.image_height, in.has_masks);
   return in;
+}
+
+/// A trajectory file, or a EuRoC folder's ground truth.
+std::vector<StampedPose> readReference(const std::string& path) {
+  namespace fs = std::filesystem;
+  if (fs::is_directory(path)) {
+    for (const fs::path& p : {fs::path(path) / "mav0/state_groundtruth_estimate0/data.csv",
+                             fs::path(path) / "state_groundtruth_estimate0/data.csv"})
+      if (fs::is_regular_file(p)) return io::readEurocCsv(p.string());
+    throw InputError(path, "folder holds no mav0/state_groundtruth_estimate0/data.csv");
+  }
+  return io::readTrajectory(path);
 }
 
 }  // namespace idyvins::app

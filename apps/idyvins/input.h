@@ -27,4 +27,8 @@ struct Input {
 Input openInput(const std::string& dataset, const Config& config, const std::string& groundtruth_topic,
                 bool masks = true);
 
+/// A reference trajectory: a TUM or EuRoC CSV file, or a EuRoC folder's ground truth
+/// (mav0/state_groundtruth_estimate0/data.csv). Throws InputError.
+std::vector<StampedPose> readReference(const std::string& path);
+
 }  // namespace idyvins::app

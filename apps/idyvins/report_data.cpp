@@ -4,11 +4,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "core/error.h"
 #include "eval/trajectory_metrics.h"
 #include "io/ply.h"
 #include "io/trajectory_io.h"
+#include "input.h"
 
 namespace fs = std::filesystem;
 
@@ -92,14 +94,15 @@ nlohmann::json positions(const std::vector<StampedPose>& poses, const eval::Simi
 /// Ground-truth panels: the estimate aligned (SE(3), evo's association), ATE over time and
 /// path, RPE; or why there are none.
 void addGroundTruth(nlohmann::json& run, const std::string& dir, const std::vector<StampedPose>& est,
-                    std::int64_t first_t_ns, eval::Similarity& align) {
-  const std::string path = dir + "/groundtruth.tum";
-  if (!fs::exists(path)) {
+                    std::int64_t first_t_ns, eval::Similarity& align, const std::string& fallback) {
+  const std::string own = dir + "/groundtruth.tum";
+  if (!fs::exists(own) && fallback.empty()) {
     run["gt_note"] = "no ground truth: the run folder has no groundtruth.tum (the dataset has no ground truth, or an "
-                     "idyvins older than the report wrote the folder)";
+                     "idyvins older than the report wrote the folder; report --groundtruth GT supplies one)";
     return;
   }
-  const std::vector<StampedPose> gt = io::readTum(path);
+  const std::vector<StampedPose> gt = fs::exists(own) ? io::readTum(own) : readReference(fallback);
+  run["gt_source"] = fs::exists(own) ? own : fallback;
   eval::AteResult ate;
   try {
     ate = eval::computeAte(gt, est, eval::AlignMode::kSe3, 10'000'000);
@@ -130,6 +133,27 @@ void addGroundTruth(nlohmann::json& run, const std::string& dir, const std::vect
     } catch (const std::exception&) {  // path shorter than delta
     }
   }
+}
+
+/// Loop events of loops.csv (times in s from the first frame): when each loop was closed, to when.
+nlohmann::json loopEvents(const std::string& path, std::int64_t first_t_ns) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "missing: the run closed loops (summary.loop_closure) but has no loops.csv");
+  nlohmann::json out = {{"t", nlohmann::json::array()}, {"old_t", nlohmann::json::array()}, {"inliers", nlohmann::json::array()}};
+  std::string line;
+  for (int line_no = 1; std::getline(in, line); ++line_no) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ss(line);
+    long long old_t = 0, new_t = 0, old_kf = 0, new_kf = 0, votes = 0, matches = 0, inliers = 0;
+    char c1, c2, c3, c4, c5, c6, c7;
+    if (!(ss >> old_t >> c1 >> new_t >> c2 >> old_kf >> c3 >> new_kf >> c4 >> votes >> c5 >> matches >> c6 >> inliers >> c7) ||
+        c1 != ',' || c2 != ',' || c3 != ',' || c4 != ',' || c5 != ',' || c6 != ',' || c7 != ',')
+      throw InputError(path, line_no, "expected old_t_ns,new_t_ns,old_keyframe,new_keyframe,votes,matches,inliers,...");
+    out["t"].push_back(round3(static_cast<double>(new_t - first_t_ns) * 1e-9));
+    out["old_t"].push_back(round3(static_cast<double>(old_t - first_t_ns) * 1e-9));
+    out["inliers"].push_back(inliers);
+  }
+  return out;
 }
 
 /// Maps as flat xyz arrays per label (aligned like the trajectory), thinned evenly past the limit.
@@ -165,6 +189,25 @@ nlohmann::json mapLayers(const std::string& dir, const eval::Similarity& align, 
   return layers;
 }
 
+/// The loop-corrected trajectory (aligned to the ground truth on its own: it may be in a loaded
+/// map's frame), its ATE over time, and the loop events.
+void addLoop(nlohmann::json& run, const std::string& folder, std::int64_t first, eval::Similarity& loop_align) {
+  const std::vector<StampedPose> lt = io::readTum(folder + "/trajectory_loop.tum");
+  if (run.contains("gt")) try {
+      const eval::AteResult ate = eval::computeAte(readReference(run["gt_source"].get<std::string>()), lt, eval::AlignMode::kSe3, 10'000'000);
+      loop_align = ate.alignment;
+      nlohmann::json err = {{"t", nlohmann::json::array()}, {"err", nlohmann::json::array()}};
+      for (std::size_t k = 0; k < ate.errors.size(); ++k) {
+        err["t"].push_back(round3(static_cast<double>(ate.stamps[k] - first) * 1e-9));
+        err["err"].push_back(round3(ate.errors[k]));
+      }
+      run["loop_ate"] = err;
+    } catch (const std::exception&) {  // no overlap: drawn unaligned
+    }
+  run["loop"] = positions(lt, loop_align, first);
+  run["loop_events"] = loopEvents(folder + "/loops.csv", first);
+}
+
 }  // namespace
 
 nlohmann::json reportRun(const std::string& folder, const ReportOptions& options) {
@@ -180,18 +223,11 @@ nlohmann::json reportRun(const std::string& folder, const ReportOptions& options
   run["ds_hist"] = ds;
   const std::vector<StampedPose> est = io::readTum(folder + "/trajectory.tum");
   eval::Similarity align;
-  addGroundTruth(run, folder, est, first, align);
+  addGroundTruth(run, folder, est, first, align, options.groundtruth);
   run["est"] = positions(est, align, first);
   const bool loop = summary.contains("loop_closure") && summary["loop_closure"].is_object();
   eval::Similarity loop_align;
-  if (loop) {  // the loop-corrected trajectory (and map) aligned to the ground truth on their own
-    const std::vector<StampedPose> lt = io::readTum(folder + "/trajectory_loop.tum");
-    if (run.contains("gt")) try {
-        loop_align = eval::computeAte(io::readTum(folder + "/groundtruth.tum"), lt, eval::AlignMode::kSe3, 10'000'000).alignment;
-      } catch (const std::exception&) {
-      }
-    run["loop"] = positions(lt, loop_align, first);
-  }
+  if (loop) addLoop(run, folder, first, loop_align);
   run["maps"] = mapLayers(folder, align, loop ? &loop_align : nullptr, options);
   if (fs::exists(folder + "/run.json")) run["run"] = readJson(folder + "/run.json");
   else run["run_note"] = "the folder has no run.json (the command and config): an idyvins older than the report wrote it";

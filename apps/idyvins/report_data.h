@@ -12,6 +12,9 @@ namespace idyvins::app {
 /// Limits of the page's payload.
 struct ReportOptions {
   std::size_t max_map_points = 200'000;  ///< per run; beyond it the map is thinned evenly (said on the page)
+  /// Ground truth for runs whose folder has no groundtruth.tum: a TUM or EuRoC CSV file or a
+  /// EuRoC folder ("" = none).
+  std::string groundtruth;
 };
 
 /// One run folder as the page's data. Throws InputError (file, line when known, what was

@@ -92,6 +92,15 @@ function trajectorySection() {
   lineChart(grid, 'Height z over time', height, { ylabel: 'z (m)', marks: marks() });
   if (!withGt.length) return;
   lineChart(grid, 'ATE over time', runs.filter((r) => r.ate).map((r) => ({ label: r.name, x: r.ate.t, y: r.ate.err, color: color(runs.indexOf(r)) })), { ylabel: 'position error (m)', marks: marks() });
+  runs.filter((r) => r.loop_events && r.ate).forEach((r) => {
+    const e = r.loop_events;
+    const loopErr = r.loop_ate || null;
+    lineChart(grid, `${r.name}: loops closed (purple: when; the odometry's ATE beside)`, [
+      { label: 'odometry ATE', x: r.ate.t, y: r.ate.err, color: color(runs.indexOf(r)) },
+      ...(loopErr ? [{ label: 'loop-corrected ATE', x: loopErr.t, y: loopErr.err, color: '#9467bd' }] : []),
+    ], { ylabel: 'position error (m)', marks: [...marks(), ...e.t.map((t) => ({ x: t, color: '#9467bd55' }))] });
+    grid.append(el('p', { class: 'note', text: `${r.name}: ${e.t.length} loops closed${e.t.length ? `, the first at ${fmt(e.t[0], 1)} s (to ${fmt(e.old_t[0], 1)} s), inliers ${Math.min(...e.inliers)}-${Math.max(...e.inliers)}` : ''}.` }));
+  });
   lineChart(grid, 'ATE along the path', runs.filter((r) => r.ate).map((r) => ({ label: r.name, x: r.ate.dist, y: r.ate.err, color: color(runs.indexOf(r)) })), { xlabel: 'distance along ground truth (m)', ylabel: 'position error (m)' });
   const rpe = el('table', {}, el('tr', {}, el('th', { text: 'RPE (translation, evo: delta in metres)' }), ...runs.map((r, i) => el('th', { style: `color:${color(i)}`, text: `${r.name}: RMSE / max (m)` }))));
   for (const delta of [1, 5, 10]) {
