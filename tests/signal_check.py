@@ -19,7 +19,7 @@ import sys
 import time
 
 FILES = {"trajectory.tum", "trajectory.csv", "state.csv", "stats.json", "resets.csv", "map_static.ply",
-         "map_dynamic.ply", "map_all.ply"}
+         "map_dynamic.ply", "map_all.ply", "run.json", "groundtruth.tum", "map_static_on_moving.ply"}
 failures = []
 
 
