@@ -226,7 +226,7 @@ struct StatsFile {
 };
 
 /// OUT/run.json (how the run was made, for `idyvins report`) and OUT/groundtruth.tum (the
-/// reference poses from 1 s before the first to 1 s after the last estimate, when there are any).
+/// reference poses from 1 s before the first to 1 s after the last frame, when there are any).
 void writeRunRecord(const std::string& dir, const RunArgs& a, const Config& config,
                     const std::vector<StampedPose>& gt, const pipeline::Result& result) {
   const auto text = [](const std::string& path) {
@@ -246,8 +246,8 @@ void writeRunRecord(const std::string& dir, const RunArgs& a, const Config& conf
   std::ofstream out(dir + "/run.json");
   out << record.dump(1) << "\n";
   if (!out) throw InputError(dir + "/run.json", "write failed");
-  if (gt.empty() || result.trajectory.empty()) return;
-  const TimeNs from = result.trajectory.front().t_ns - 1'000'000'000, to = result.trajectory.back().t_ns + 1'000'000'000;
+  if (gt.empty()) return;  // the span of the frames processed (a run stopped early may have no pose yet)
+  const TimeNs from = result.summary.first_t_ns - 1'000'000'000, to = result.summary.last_t_ns + 1'000'000'000;
   std::vector<StampedPose> span;
   for (const StampedPose& p : gt)
     if (p.t_ns >= from && p.t_ns <= to) span.push_back(p);
