@@ -11,7 +11,6 @@
 namespace fs = std::filesystem;
 
 namespace idyvins::app {
-std::string reportStyle();
 
 namespace {
 

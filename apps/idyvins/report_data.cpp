@@ -16,12 +16,6 @@ namespace fs = std::filesystem;
 
 namespace idyvins::app {
 
-// web/src/template.html and the esbuild bundle of web/src/report.js (script and style), embedded
-// by cmake/embed_report.cmake.
-std::string reportTemplate();
-std::string reportScript();
-std::string reportStyle();
-
 namespace {
 
 double round3(double v) { return std::isfinite(v) ? std::round(v * 1000.0) / 1000.0 : 0.0; }

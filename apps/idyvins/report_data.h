@@ -27,6 +27,12 @@ nlohmann::json reportRun(const std::string& folder, const ReportOptions& options
 /// sequences: other first frame time or frame count).
 nlohmann::json reportData(const std::vector<std::string>& folders, const ReportOptions& options);
 
+/// web/src/template.html and the esbuild bundle of web/src/report.js (script and style), embedded
+/// at build time by cmake/embed_report.cmake.
+std::string reportTemplate();
+std::string reportScript();
+std::string reportStyle();
+
 /// The HTML page: template, style and script (embedded at build time) with `data` inlined.
 std::string reportHtml(const nlohmann::json& data);
 
