@@ -8,7 +8,7 @@ PACKAGES=(
   libeigen3-dev libceres-dev libopencv-dev libyaml-cpp-dev
   libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3-numpy python3-matplotlib python3-pil
+  python3-numpy python3-matplotlib python3-pil python3-opencv python3-yaml
   # ROS1 bags without a ROS installation: rosbag_storage, the message headers, and the
   # headers its bag.h includes (pluginlib from ROS 2 in Debian); python3-rosbag writes the test bags
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -148,9 +149,9 @@ TEST(Cli, RunIdyWritesOutputsAndObservationDump) {
   const std::string csv = idyvins::test::readFile(dir / "obs.csv");
   const std::string header =
       "t_ns,id,u,v,track_length,frontend_label,d_s_px2,credibility,stereo_chi2,on_moving,confirmed_dynamic,"
-      "in_static_map,outlier_removed,stereo_depth_m\n";
+      "in_static_map,outlier_removed,stereo_depth_m,u_right,v_right\n";
   ASSERT_EQ(csv.compare(0, header.size(), header), 0) << csv.substr(0, 200);
-  std::size_t rows = 0, tested = 0, eliminated = 0, on_moving = 0;
+  std::size_t rows = 0, tested = 0, eliminated = 0, on_moving = 0, with_right = 0;
   std::size_t pos = header.size();
   while (pos < csv.size()) {
     const std::size_t end = csv.find('\n', pos);
@@ -162,16 +163,25 @@ TEST(Cli, RunIdyWritesOutputsAndObservationDump) {
       a = b + 1;
     }
     cols.push_back(csv.substr(a, end - a));
-    ASSERT_EQ(cols.size(), 14u) << csv.substr(pos, end - pos);
+    ASSERT_EQ(cols.size(), 16u) << csv.substr(pos, end - pos);
     ++rows;
     tested += std::stod(cols[8]) >= 0;
     EXPECT_EQ(std::stod(cols[8]) >= 0, std::stod(cols[13]) > 0);  // a depth exactly where a χ² is
+    if (!cols[14].empty()) {  // the right match, pixels: inside the 752 x 480 image, beside the left one
+      ++with_right;
+      EXPECT_TRUE(std::stod(cols[14]) >= 0 && std::stod(cols[14]) < 752 && std::abs(std::stod(cols[15]) - std::stod(cols[3])) < 3)
+          << csv.substr(pos, end - pos);
+    }
+    if (std::stod(cols[8]) >= 0) {
+      EXPECT_FALSE(cols[14].empty());  // the stereo test needs a right match
+    }
     eliminated += cols[5] == "eliminated";
     on_moving += cols[9] == "1";
     pos = end + 1;
   }
   EXPECT_GT(rows, 5000u);
   EXPECT_GT(tested, rows / 2);   // most tracked features have right matches in both frames
+  EXPECT_GT(with_right, tested);
   EXPECT_GT(eliminated, 50u);    // the trucks
   EXPECT_GT(on_moving, 500u);    // masks were read
   // Stereo test off in the config: no χ² in the dump.

@@ -41,8 +41,9 @@ void ObservationRecorder::onFrame(const StereoFrame& input, const FrameOutput& o
     if (keep_observations_)
       observations_.push_back({f.id, moving, output.t_ns, static_cast<float>(f.uv.x()), static_cast<float>(f.uv.y()),
                                static_cast<float>(f.d_s_px2), cred, static_cast<float>(f.stereo_chi2),
-                               static_cast<float>(f.stereo_depth), f.label,
-                               f.track_length});
+                               static_cast<float>(f.stereo_depth),
+                               static_cast<float>(f.has_right ? f.uv_right.x() : -1.0),
+                               static_cast<float>(f.has_right ? f.uv_right.y() : -1.0), f.label, f.track_length});
   };
   for (const auto& f : output.features.features) record(f);
   for (const auto& f : output.features.removed) record(f);  // label kEliminated
@@ -83,13 +84,17 @@ void ObservationRecorder::writeCsv(const std::string& path, const Result& result
   std::ofstream f(path);
   if (!f) throw InputError(path, "cannot write file");
   f << "t_ns,id,u,v,track_length,frontend_label,d_s_px2,credibility,stereo_chi2,on_moving,confirmed_dynamic,"
-       "in_static_map,outlier_removed,stereo_depth_m\n";
+       "in_static_map,outlier_removed,stereo_depth_m,u_right,v_right\n";
   static const char* kLabels[] = {"static", "candidate", "eliminated", "confirmed_dynamic"};
-  for (const auto& o : observations_)
+  for (const auto& o : observations_) {
     f << o.t_ns << ',' << o.id << ',' << o.u << ',' << o.v << ',' << o.track_length << ','
       << kLabels[static_cast<int>(o.label)] << ',' << o.d_s << ',' << o.credibility << ',' << o.stereo_chi2 << ','
       << (has_masks_ ? (o.on_moving ? "1" : "0") : "") << ',' << confirmed.count(o.id) << ','
-      << in_static.count(o.id) << ',' << outlier_ids_.count(o.id) << ',' << o.stereo_depth << '\n';
+      << in_static.count(o.id) << ',' << outlier_ids_.count(o.id) << ',' << o.stereo_depth << ',';
+    if (o.u_right >= 0) f << o.u_right << ',' << o.v_right;
+    else f << ',';
+    f << '\n';
+  }
   if (!f) throw InputError(path, "write failed");
 }
 

@@ -44,6 +44,7 @@ class ObservationRecorder final : public FrameObserver {
     bool on_moving;
     TimeNs t_ns;
     float u, v, d_s, credibility, stereo_chi2, stereo_depth;
+    float u_right, v_right;  ///< the right match, pixels; negative without one
     frontend::FeatureLabel label;
     int track_length;
   };
