@@ -114,6 +114,26 @@ def subscribed(topics, node):
     return all(any(n.startswith(node) for n in by_topic.get(t, [])) for t in topics)
 
 
+class TimingCounter:
+    """Counts each node's ~timing messages (one per processed frame) from this process."""
+
+    def __init__(self, nodes):
+        import rospy
+        from std_msgs.msg import Float64MultiArray
+        rospy.init_node("ros_check", anonymous=True, disable_signals=True)
+        self.counts = {th: 0 for th in nodes}
+        self.subs = [rospy.Subscriber("/idyvins%d/timing" % th, Float64MultiArray, self.count, th, queue_size=1000)
+                     for th in nodes]
+        check(wait_for(lambda: all(s.get_num_connections() > 0 for s in self.subs), 60),
+              "the check subscribed to both nodes' timing topics")
+
+    def count(self, _msg, th):
+        self.counts[th] += 1
+
+    def reached(self, expected):
+        return all(self.counts[th] >= n for th, n in expected.items())
+
+
 def loop_config(cfg):
     """The config with loop_closure: 1, beside it."""
     path = os.path.join(os.path.dirname(cfg), "loop.yaml")
@@ -137,13 +157,20 @@ def play_into_nodes(ros, bag, cfg, work):
           "both nodes subscribed to the config's imu_topic, image0_topic, image1_topic")
     # --wait-for-subscribers waits for one subscriber per topic; -d gives the second node time to
     # connect too after each advertise (under load a connection can take a while).
+    timing = TimingCounter(nodes)
     play = subprocess.run(["rosbag", "play", "-q", "--wait-for-subscribers", "-d", "2", "--topics"] + inputs +
                           ["--", bag],
                           env=ros.env, capture_output=True, text=True, timeout=300)
     check(play.returncode == 0, "rosbag play: " + play.stderr.strip()[-200:])
+    # The node drains its queue when stopped, but what it publishes while ROS shuts down is less
+    # sure to reach the recorder: the stop comes once every frame's timing message has arrived
+    # (under load a node can be seconds behind the bag). With two threads the last frame's back
+    # end waits for a next frame, so it runs at the stop.
+    expected = {1: FRAMES, 2: FRAMES - 1}
+    check(wait_for(lambda: timing.reached(expected), 300),
+          "timing messages before the stop: %s of %s" % (timing.counts, expected))
     codes = {}
     for th, p in nodes.items():
-        # The node drains its queue when stopped; the stop comes once play has ended.
         time.sleep(1.0)
         codes[th] = stop(p)
     stop(rec)

@@ -129,6 +129,9 @@ int runNode(int argc, char** argv) {
   ROS_INFO("idyvins: %zu frames processed, %zu poses, %zu dropped (queue full); latency median %.1f ms, p95 %.1f ms",
            result.summary.frames, result.trajectory.size(), s["frames_dropped_queue_full"].get<std::size_t>(),
            s["latency_median_ms"].get<double>(), s["latency_p95_ms"].get<double>());
+  // Messages published while draining sit in the publishers' outgoing queues; ros::shutdown()
+  // drops what is still there, so the transport gets a moment to deliver them.
+  ros::WallDuration(0.5).sleep();
   return driver.error().empty() ? 0 : 1;
 }
 
