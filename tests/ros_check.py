@@ -171,7 +171,7 @@ def play_into_nodes(ros, bag, cfg, work):
           "timing messages before the stop: %s of %s" % (timing.counts, expected))
     codes = {}
     for th, p in nodes.items():
-        time.sleep(1.0)
+        time.sleep(1.0)  # the frame's other messages follow its timing message
         codes[th] = stop(p)
     stop(rec)
     return codes
