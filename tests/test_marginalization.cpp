@@ -217,6 +217,44 @@ void addLandmark(ceres::Problem& problem, Window& w, Window::Landmark& lm) {
   problem.AddResidualBlock(lm.stereo.get(), w.huber.get(), &lm.inv_depth);
 }
 
+TEST(Marginalization, ScaledInformationScalesTheCostAndKeepsTheMinimum) {
+  // A prior on one 3-vector from two linear factors, then faded to 0.3 of its information.
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g(0.0, 1.0);
+  auto r3 = [&]() -> Vector3d { return Vector3d(g(rng), g(rng), g(rng)); };
+  Vector3d a = r3(), b = r3();
+  Marginalizer marg;
+  marg.add({std::make_shared<LinearFactor>(std::vector<double>{1}, r3(), Eigen::Matrix3d::Identity()), nullptr,
+            {a.data()}, {0}});
+  marg.add({std::make_shared<LinearFactor>(std::vector<double>{-1, 1}, r3(), 2.0 * Eigen::Matrix3d::Identity()),
+            nullptr, {a.data(), b.data()}, {0}});
+  auto full = std::make_shared<MarginalizationPrior>(marg.marginalize());
+  auto faded = std::make_shared<MarginalizationPrior>(*full);
+  faded->scaleInformation(0.3);
+  MarginalizationFactor f_full(full), f_faded(faded);
+  for (int trial = 0; trial < 5; ++trial) {
+    Vector3d x = b + r3();
+    const double* params[] = {x.data()};
+    Vector3d r_full, r_faded;
+    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> J_full, J_faded;
+    double* jf[] = {J_full.data()};
+    double* jd[] = {J_faded.data()};
+    ASSERT_TRUE(f_full.Evaluate(params, r_full.data(), jf));
+    ASSERT_TRUE(f_faded.Evaluate(params, r_faded.data(), jd));
+    EXPECT_NEAR(r_faded.squaredNorm(), 0.3 * r_full.squaredNorm(), 1e-9 * (1.0 + r_full.squaredNorm()));
+    EXPECT_TRUE(J_faded.isApprox(std::sqrt(0.3) * J_full, 1e-12));
+  }
+  // Same minimizer: the faded prior's gradient vanishes where the full one's does.
+  const Eigen::Matrix3d H = full->J0.transpose() * full->J0;
+  const Vector3d x_min = b - H.ldlt().solve(full->J0.transpose() * full->r0);
+  const double* params[] = {x_min.data()};
+  Vector3d r;
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> J;
+  double* jac[] = {J.data()};
+  ASSERT_TRUE(f_faded.Evaluate(params, r.data(), jac));
+  EXPECT_LT((J.transpose() * r).norm(), 1e-9);
+}
+
 TEST(Marginalization, VisualInertialWindowReSolvesToTheFullEstimate) {
   Window w;
   buildWindow(w);

@@ -726,6 +726,7 @@ void Estimator::marginalizeOldest() {
         m.add({lf.cost, huber, factorBlocks(lm, lf.frame, false), lf.frame < 0 ? std::vector<int>{0} : std::vector<int>{0, 2}});
     }
     prior_ = std::make_shared<MarginalizationPrior>(m.marginalize());
+    if (options_.prior_fading < 1.0) prior_->scaleInformation(options_.prior_fading);
     if (prior_->blocks.empty()) prior_.reset();
   }
   if (initialized_) leaving_ = leavingKeyframe();

@@ -33,6 +33,10 @@ struct EstimatorOptions {
   double init_rotation_check_deg = 3.0;  ///< PnP vs gyro disagreement that rejects an init frame
   int min_pnp_points = 15;
   int clear_after_observations = 4;  ///< a candidate that passes with this many observations becomes static
+  /// Fraction of the marginalization prior's information kept at each keyframe (1: all, as
+  /// VINS-Fusion). Below 1 the prior fades: what frames k keyframes old contributed weighs
+  /// prior_fading^k (docs/results.md: the validation family's scale error).
+  double prior_fading = 1.0;
 
   // What the integration between two frames can bridge (issue: faults end a segment cleanly).
   /// Two IMU samples farther apart than this between two frames (a dropout, a time jump)
@@ -80,6 +84,8 @@ struct EstimatorOptions {
     v.param({"min_pnp_points", "points of an initialization PnP", ParamRule::kPositive}, min_pnp_points);
     v.param({"candidate_clear_observations", "passing observations that clear a candidate", ParamRule::kPositive},
             clear_after_observations);
+    v.param({"prior_fading", "fraction of the prior's information kept per keyframe (1: all)", ParamRule::kFraction},
+            prior_fading);
     v.section("Faults: what the integration between two frames bridges (larger gaps reset the window)");
     v.param({"max_imu_gap", "s, largest gap between two IMU samples", ParamRule::kPositive}, max_imu_gap_s);
     v.param({"max_frame_gap", "s, largest gap between two frames", ParamRule::kPositive}, max_frame_gap_s);

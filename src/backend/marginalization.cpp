@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <stdexcept>
 
@@ -62,6 +63,12 @@ void MarginalizationPrior::remap(const std::unordered_map<double*, double*>& old
     const auto it = old_to_new.find(b);
     if (it != old_to_new.end()) b = it->second;
   }
+}
+
+void MarginalizationPrior::scaleInformation(double weight) {
+  const double k = std::sqrt(weight);
+  J0 *= k;
+  r0 *= k;
 }
 
 void Marginalizer::add(MarginalizationTerm term) { terms_.push_back(std::move(term)); }

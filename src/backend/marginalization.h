@@ -34,6 +34,9 @@ struct MarginalizationPrior {
   Eigen::VectorXd r0;
   /// Replaces block addresses (after the window slides); unknown ones are kept.
   void remap(const std::unordered_map<double*, double*>& old_to_new);
+  /// Keeps the fraction `weight` (0, 1] of the prior's information: its cost at every
+  /// Δx is multiplied by `weight` (a fading memory, EstimatorOptions::prior_fading).
+  void scaleInformation(double weight);
 };
 
 /// Collects terms, then marginalizes. Block sizes are those of the cost functions.
