@@ -416,5 +416,27 @@ TEST(FeatureManager, TriangulationAndReanchoring) {
   EXPECT_NEAR(1.0 / moved.inv_depth, (cameraPose(T1, rig.T_b_c0).inverse() * p_w).z(), 1e-9);
 }
 
+TEST(FeatureManager, RightMatchesKeptOutOfTheMotionTestsAreStereoObservations) {
+  // A right match that failed only the tracker's patch-correlation check
+  // (stereo_zncc_motion_only) reaches the estimator: the anchor is triangulated from it.
+  Rig rig;
+  rig.T_b_c1.t_b_c = Vector3d(0.11, 0, 0);
+  const Vector3d p_c0(0.5, -0.2, 7.0);
+  frontend::FeatureFrame ff;
+  frontend::Feature f;
+  f.id = 3;
+  f.xy = Vector2d(p_c0.x() / p_c0.z(), p_c0.y() / p_c0.z());
+  f.right_low_zncc = true;  // has_right stays false: no motion test sees it
+  f.xy_right = Vector2d((p_c0.x() - 0.11) / p_c0.z(), p_c0.y() / p_c0.z());
+  ff.features.push_back(f);
+  FeatureManager fm;
+  fm.addFrame(0, ff, 10.0, 460.0);
+  const Landmark& lm = fm.landmarks().at(3);
+  ASSERT_TRUE(lm.obs.front().has_right);
+  fm.triangulate({Eigen::Isometry3d::Identity()}, rig);
+  EXPECT_TRUE(lm.usable());
+  EXPECT_NEAR(1.0 / fm.landmarks().at(3).inv_depth, p_c0.z(), 1e-9);
+}
+
 }  // namespace
 }  // namespace idyvins::backend

@@ -485,6 +485,43 @@ TEST(FeatureTracker, StereoMatchesWithLowZnccAreMoreOftenWrongOrBesideAVehicle) 
   EXPECT_GT(rate(low.vehicle, low), 1.5 * rate(high.vehicle, high));
 }
 
+TEST(FeatureTracker, LowZnccRightMatchesOnlyLeaveTheMotionTests) {
+  // stereo_zncc_motion_only: a right match below stereo_min_zncc is not a right match for
+  // the motion tests (has_right false, exactly as when the check drops it) but is handed on
+  // (right_low_zncc) with its KLT position for the estimator.
+  const sim::Scene scene(options("city", sim::Level::kHigh, 2.0));
+  const Config& rig = scene.rig();
+  TrackerParams dropped = rig.tracker, kept = rig.tracker;
+  dropped.stereo_zncc_motion_only = false;
+  kept.stereo_zncc_motion_only = true;
+  FeatureTracker a(rig.rig(), dropped), b(rig.rig(), kept);
+  std::size_t low = 0, verified = 0;
+  for (std::size_t k = 0; k < 41; ++k) {
+    const sim::SceneFrame f = scene.renderFrame(k);
+    const FeatureFrame fa = a.track(stereo(f), MotionPrior{}, nullptr);
+    const FeatureFrame fb = b.track(stereo(f), MotionPrior{}, nullptr);
+    ASSERT_EQ(fa.features.size(), fb.features.size()) << "frame " << k;
+    for (std::size_t i = 0; i < fa.features.size(); ++i) {
+      const Feature &x = fa.features[i], &y = fb.features[i];
+      ASSERT_EQ(x.id, y.id);
+      EXPECT_EQ(x.has_right, y.has_right) << "frame " << k << " id " << x.id;
+      EXPECT_FALSE(x.right_low_zncc);
+      EXPECT_FALSE(y.has_right && y.right_low_zncc);
+      if (x.has_right) {
+        EXPECT_EQ(x.uv_right, y.uv_right);
+        ++verified;
+      }
+      if (!y.right_low_zncc) continue;
+      ++low;
+      EXPECT_LT(patchZncc(f.cam[0].image, y.uv, f.cam[1].image, y.uv_right, kept.patch_half), kept.stereo_min_zncc);
+      EXPECT_GT(y.uv.x(), y.uv_right.x());  // a positive disparity: a right match, not a placeholder
+    }
+  }
+  std::printf("right matches: %zu passing the ZNCC check, %zu below it kept for the estimator\n", verified, low);
+  EXPECT_GT(low, 10u);
+  EXPECT_GT(verified, 20 * low);
+}
+
 TEST(Rejection, SegDropsExactlyTheFeaturesOnMaskedPixels) {
   const sim::Scene scene(options("city", sim::Level::kHigh, 3.0));
   FeatureTracker tracker(scene.rig().rig(), scene.rig().tracker);

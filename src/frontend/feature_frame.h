@@ -19,12 +19,16 @@ struct Feature {
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();     ///< left pixel (distorted image)
   Eigen::Vector2d xy = Eigen::Vector2d::Zero();     ///< left normalized, undistorted (x/z, y/z)
   bool has_right = false;
+  /// A right match (uv_right, xy_right) that failed only the patch-correlation check
+  /// (TrackerParams::stereo_zncc_motion_only): has_right is false, so the motion tests and
+  /// the maps ignore it; the estimator uses it as a stereo observation.
+  bool right_low_zncc = false;
   Eigen::Vector2d uv_right = Eigen::Vector2d::Zero();
   Eigen::Vector2d xy_right = Eigen::Vector2d::Zero();
   Eigen::Vector2d velocity_px = Eigen::Vector2d::Zero();  ///< left pixel velocity, px/s
   /// Velocity on the normalized image plane (1/s), left and right, from the previous frame's
-  /// observation of the same track (zero for a new track or without a right match in both
-  /// frames); the estimator moves observations along it when it estimates the time offset.
+  /// observation of the same track (zero for a new track or without a right match, of
+  /// either kind, in both frames); the estimator moves observations along it when it estimates the time offset.
   Eigen::Vector2d velocity_xy = Eigen::Vector2d::Zero();
   Eigen::Vector2d velocity_xy_right = Eigen::Vector2d::Zero();
   int track_length = 1;  ///< frames this id has been tracked (1 = new)

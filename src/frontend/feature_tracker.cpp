@@ -275,7 +275,7 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
   for (const auto& c : corners) {
     Eigen::Vector2d xy;
     if (!inBorder(c) || !cams_[0]->liftToNormalized(toEigen(c), xy)) continue;
-    Track t{next_id_++, c, xy, 1, nullptr, Eigen::Matrix2d::Identity(), false, Eigen::Vector2d::Zero()};
+    Track t{next_id_++, c, xy, 1, nullptr, Eigen::Matrix2d::Identity(), false, false, Eigen::Vector2d::Zero()};
     if (params_.align_first_patch) {
       auto patch = std::make_shared<PatchTemplate>(
           makePatchTemplate(image, toEigen(c), params_.patch_half, params_.patch_min_inside));
@@ -317,6 +317,7 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
   for (std::size_t i = 0; i < n; ++i) {
     Feature& feat = features[(*which)[i]];
     feat.has_right = false;
+    feat.right_low_zncc = false;
     bool ok = status[i] != 0;
     if (ok && params_.flow_back) ok = status_back[i] && cv::norm(back[i] - pl[i]) <= params_.flow_back_px;
     if (ok && params_.stereo_refine) {
@@ -334,11 +335,13 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
     const Eigen::Vector3d line = E_c1_c0_ * x0;
     const double dist = std::abs(x1.dot(line)) / std::max(line.head<2>().norm(), 1e-12);
     if (dist * f > params_.stereo_epipolar_px) continue;
-    if (params_.stereo_min_zncc > -1.0 &&
-        patchZncc(left_pyr[0], feat.uv, right_pyr[0], toEigen(pr[i]), params_.patch_half, params_.patch_min_inside) <
-            params_.stereo_min_zncc)
-      continue;
-    feat.has_right = true;
+    const bool correlates =
+        params_.stereo_min_zncc <= -1.0 ||
+        patchZncc(left_pyr[0], feat.uv, right_pyr[0], toEigen(pr[i]), params_.patch_half, params_.patch_min_inside) >=
+            params_.stereo_min_zncc;
+    if (!correlates && !params_.stereo_zncc_motion_only) continue;
+    feat.has_right = correlates;
+    feat.right_low_zncc = !correlates;
     feat.uv_right = toEigen(pr[i]);
     feat.xy_right = xy_r;
   }
@@ -514,7 +517,8 @@ void FeatureTracker::setVelocities(FeatureFrame& out, double dt) const {
     const Track& p = *it->second;
     f.velocity_px = (f.uv - toEigen(p.uv)) / dt;
     f.velocity_xy = (f.xy - p.xy) / dt;
-    if (f.has_right && p.has_right) f.velocity_xy_right = (f.xy_right - p.xy_right) / dt;
+    if ((f.has_right || f.right_low_zncc) && (p.has_right || p.right_low_zncc))
+      f.velocity_xy_right = (f.xy_right - p.xy_right) / dt;
   }
 }
 
@@ -533,8 +537,10 @@ void FeatureTracker::matchNewAndFollowed(FeatureFrame& out, std::vector<Track>& 
   for (auto& t : final_tracks) {
     auto it = by_id.find(t.id);
     t.has_right = it != by_id.end() && it->second->has_right;
-    t.xy_right = t.has_right ? it->second->xy_right : Eigen::Vector2d::Zero();
-    t.uv_right = t.has_right ? it->second->uv_right : Eigen::Vector2d::Zero();
+    t.right_low_zncc = it != by_id.end() && it->second->right_low_zncc;
+    const bool right = t.has_right || t.right_low_zncc;
+    t.xy_right = right ? it->second->xy_right : Eigen::Vector2d::Zero();
+    t.uv_right = right ? it->second->uv_right : Eigen::Vector2d::Zero();
   }
 }
 

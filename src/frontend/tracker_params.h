@@ -33,6 +33,12 @@ struct TrackerParams {
   /// patch_half patches) is dropped: such matches are more often wrong (> 1 px or hidden)
   /// or beside a vehicle than the rest (docs/method.md). -1 switches the check off.
   double stereo_min_zncc = 0.8;
+  /// 1: a match that fails only that check is kept out of the motion tests (the feature has
+  /// no right match there) but still reaches the estimator as a stereo observation: on oblique
+  /// near surfaces (a garage floor) the correlation drops with the perspective difference,
+  /// not with the match, and without them the estimated path came out long (docs/method.md).
+  /// 0: the match is dropped everywhere.
+  bool stereo_zncc_motion_only = true;
 
   // Pyramidal KLT.
   int klt_window = 13;  ///< px; smaller than VINS-Fusion's 21: less drift under perspective change (measured)
@@ -107,6 +113,8 @@ struct TrackerParams {
     v.param({"stereo_refine", "0/1, right matches refined by patch alignment"}, stereo_refine);
     v.param({"stereo_min_zncc", "ZNCC of the left and right patches, -1 = off", ParamRule::kCorrelation},
             stereo_min_zncc);
+    v.param({"stereo_zncc_motion_only", "0/1, low-ZNCC right matches only kept out of the motion tests"},
+            stereo_zncc_motion_only);
     v.section("Feature tracker: pyramidal KLT");
     v.param({"klt_window", "px, square window side", ParamRule::kPositive}, klt_window);
     v.param({"klt_max_level", "pyramid levels above the full image (OpenCV maxLevel)", ParamRule::kNonNegative},
