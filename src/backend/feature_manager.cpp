@@ -41,7 +41,7 @@ bool FeatureManager::addFrame(int frame, const frontend::FeatureFrame& ff, doubl
     Observation o;
     o.xy = f.xy;
     o.uv = f.uv;
-    o.has_right = f.has_right || f.right_low_zncc;  // the estimator uses both kinds of right match
+    o.has_right = f.hasAnyRight();  // the estimator uses both kinds of right match
     o.xy_right = f.xy_right;
     o.velocity = f.velocity_xy;
     o.velocity_right = f.velocity_xy_right;

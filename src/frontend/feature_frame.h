@@ -23,6 +23,7 @@ struct Feature {
   /// (TrackerParams::stereo_zncc_motion_only): has_right is false, so the motion tests and
   /// the maps ignore it; the estimator uses it as a stereo observation.
   bool right_low_zncc = false;
+  bool hasAnyRight() const { return has_right || right_low_zncc; }  ///< a right match of either kind
   Eigen::Vector2d uv_right = Eigen::Vector2d::Zero();
   Eigen::Vector2d xy_right = Eigen::Vector2d::Zero();
   Eigen::Vector2d velocity_px = Eigen::Vector2d::Zero();  ///< left pixel velocity, px/s

@@ -517,8 +517,7 @@ void FeatureTracker::setVelocities(FeatureFrame& out, double dt) const {
     const Track& p = *it->second;
     f.velocity_px = (f.uv - toEigen(p.uv)) / dt;
     f.velocity_xy = (f.xy - p.xy) / dt;
-    if ((f.has_right || f.right_low_zncc) && (p.has_right || p.right_low_zncc))
-      f.velocity_xy_right = (f.xy_right - p.xy_right) / dt;
+    if (f.hasAnyRight() && p.hasAnyRight()) f.velocity_xy_right = (f.xy_right - p.xy_right) / dt;
   }
 }
 
@@ -538,7 +537,7 @@ void FeatureTracker::matchNewAndFollowed(FeatureFrame& out, std::vector<Track>& 
     auto it = by_id.find(t.id);
     t.has_right = it != by_id.end() && it->second->has_right;
     t.right_low_zncc = it != by_id.end() && it->second->right_low_zncc;
-    const bool right = t.has_right || t.right_low_zncc;
+    const bool right = t.hasAnyRight();
     t.xy_right = right ? it->second->xy_right : Eigen::Vector2d::Zero();
     t.uv_right = right ? it->second->uv_right : Eigen::Vector2d::Zero();
   }

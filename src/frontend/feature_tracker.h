@@ -50,6 +50,7 @@ class FeatureTracker {
     Eigen::Matrix2d A_patch = Eigen::Matrix2d::Identity();  ///< current affine shape of the patch
     bool has_right = false;                                 ///< right match in this track's frame
     bool right_low_zncc = false;                            ///< Feature::right_low_zncc
+    bool hasAnyRight() const { return has_right || right_low_zncc; }
     Eigen::Vector2d xy_right = Eigen::Vector2d::Zero();
     Eigen::Vector2d uv_right = Eigen::Vector2d::Zero();
     Eigen::Vector2d flow = Eigen::Vector2d::Zero();  ///< displacement since the previous frame (px)
