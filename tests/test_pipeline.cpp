@@ -579,6 +579,31 @@ TEST(Outputs, FilesAreWrittenUnderATemporaryNameAndRenamedWhenComplete) {
   fs::remove_all(dir);
 }
 
+TEST(Outputs, AteGivesTheScaleErrorOfAPathTooLongAndTheErrorLeftWithoutIt) {
+  std::vector<StampedPose> gt;
+  Result r;
+  for (int k = 0; k < 200; ++k) {
+    StampedPose g;
+    g.t_ns = 1'000'000'000 + static_cast<TimeNs>(k) * 50'000'000;
+    g.p_w_b = Eigen::Vector3d(0.1 * k, 2.0 * std::sin(0.05 * k), 0.3 * std::cos(0.03 * k));
+    gt.push_back(g);
+    StampedState s;
+    s.t_ns = g.t_ns;
+    s.state.p_w_b = 1.01 * g.p_w_b + Eigen::Vector3d(5, -2, 1);  // 1 % too long, elsewhere
+    r.trajectory.push_back(s);
+  }
+  nlohmann::json summary;
+  addAte(summary, gt, r);
+  ASSERT_TRUE(summary.contains("ate_sim3_rmse_m") && summary.contains("scale_error")) << summary.dump();
+  EXPECT_NEAR(summary["scale_error"].get<double>(), 0.01, 1e-9);
+  EXPECT_LT(summary["ate_sim3_rmse_m"].get<double>(), 1e-9);
+  EXPECT_GT(summary["ate_rmse_m"].get<double>(), 0.02);  // SE3 cannot absorb the scale
+  // A path 1 % too short: −1 % (1/s − 1 with p_ref ≈ s R p_est + t).
+  for (auto& s : r.trajectory) s.state.p_w_b *= 0.99 / 1.01;
+  addAte(summary, gt, r);
+  EXPECT_NEAR(summary["scale_error"].get<double>(), -0.01, 1e-9);
+}
+
 TEST(StatsRecorder, WritesOneLinePerFrameAndAParseableDocument) {
   for (const int n : {0, 1, 3}) {
     std::ostringstream os;

@@ -57,6 +57,12 @@ double ateOf(const nlohmann::json& s) {
   return ate > 0.1 * path ? NAN : ate;
 }
 
+/// A field of a run that did not fail (ateOf), or NaN.
+double fieldOf(const nlohmann::json& s, const char* key) {
+  if (std::isnan(ateOf(s)) || !s.contains(key) || !s[key].is_number()) return NAN;
+  return s[key].get<double>();
+}
+
 std::string fmt(double v, int digits = 3) {
   if (std::isnan(v)) return "x";
   char b[32];
@@ -162,6 +168,7 @@ struct Collected {
   nlohmann::json results = nlohmann::json::array();  ///< results.json: what does not depend on the machine
   nlohmann::json timing = nlohmann::json::array();   ///< timing.json: the rest
   std::map<std::string, std::map<std::string, std::vector<double>>> ate;  ///< scene_level -> mode -> per seed
+  std::map<std::string, std::map<std::string, std::vector<double>>> ate_sim3, scale_error;  ///< the same
   std::map<std::string, std::map<std::string, std::vector<nlohmann::json>>> by_level;  ///< level -> mode -> summaries
 };
 
@@ -176,6 +183,8 @@ Collected collect(const Sweep& sweep, const std::vector<JobResult>& found) {
                          {"summary", withoutTiming(s, timing)}});
     c.timing.push_back({{"sequence", j.sequence}, {"mode", j.mode}, {"run", run}, {"timing", timing}});
     c.ate[j.group][j.mode].push_back(ateOf(s));
+    c.ate_sim3[j.group][j.mode].push_back(fieldOf(s, "ate_sim3_rmse_m"));
+    c.scale_error[j.group][j.mode].push_back(fieldOf(s, "scale_error"));
     if (!s.is_null()) c.by_level[j.level][j.mode].push_back(s);
   }
   return c;
@@ -202,11 +211,13 @@ void tableHeader(std::ostringstream& t, const std::vector<std::string>& columns)
 /// to the baseline (seg, ground-truth masks, is what a perfect detector would give).
 std::string table1(const Collected& c, const std::vector<std::string>& modes, const std::string& seeds,
                    const std::vector<std::string>& columns) {
-  auto ate = [&](const std::string& col, const std::string& mode) {
-    const auto it = c.ate.find(col);
-    if (it == c.ate.end() || !it->second.count(mode)) return static_cast<double>(NAN);
+  // Mean over seeds of one column and mode of a per-seed table (NaN when any seed failed).
+  auto mean = [&](const auto& by_group, const std::string& col, const std::string& mode) {
+    const auto it = by_group.find(col);
+    if (it == by_group.end() || !it->second.count(mode)) return static_cast<double>(NAN);
     return meanOrNan(it->second.at(mode));
   };
+  auto ate = [&](const std::string& col, const std::string& mode) { return mean(c.ate, col, mode); };
   std::ostringstream t1;
   t1 << "ATE RMSE (m, SE3 alignment)" << (seeds.empty() ? std::string() : ", mean over seeds " + seeds)
      << "; x = failure (no estimate, or ATE > 10 % of path).\n\n";
@@ -230,6 +241,22 @@ std::string table1(const Collected& c, const std::vector<std::string>& modes, co
     for (const auto& col : columns) {
       const double q = ate(col, mode) / ate(col, "baseline");
       t1 << " " << (std::isnan(q) ? std::string("x") : fmt(q, 2) + "x") << " |";
+    }
+    t1 << "\n";
+  }
+  // The same runs aligned with a similarity (evo's -as): the error left once the scale is
+  // free, and the scale error 1/s − 1 (positive: the path is too long).
+  t1 << "\nATE RMSE (m) after a similarity alignment (sim3, evo's -as), and in brackets the scale error "
+        "1/s - 1 (%, positive: the estimated path is too long)"
+     << (seeds.empty() ? std::string() : ", means over seeds " + seeds) << ".\n\n";
+  tableHeader(t1, columns);
+  for (const auto& mode : modes) {
+    t1 << "| " << mode << " |";
+    for (const auto& col : columns) {
+      const double v = mean(c.ate_sim3, col, mode), e = mean(c.scale_error, col, mode);
+      char pct[32];
+      std::snprintf(pct, sizeof(pct), " (%+.2f %%)", 100.0 * e);
+      t1 << " " << fmt(v) << (std::isnan(e) ? std::string() : pct) << " |";
     }
     t1 << "\n";
   }

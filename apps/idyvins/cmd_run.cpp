@@ -128,6 +128,24 @@ void printLoops(const nlohmann::json& l, TimeNs first_t_ns) {
   }
 }
 
+/// The ATE lines of a run with ground truth: SE3, sim(3) with the scale error, each segment's.
+void printAte(const nlohmann::json& s) {
+  if (s.contains("ate_rmse_m")) {
+    const double ate = s["ate_rmse_m"], path = s["path_length_m"];
+    std::printf("ATE RMSE (SE3) %.4f m over %.1f m (%.2f%%)\n", ate, path, 100 * ate / path);
+    if (s.contains("ate_sim3_rmse_m"))
+      std::printf("ATE RMSE (sim3) %.4f m, scale error %+.3f%% (positive: path too long)\n",
+                  s["ate_sim3_rmse_m"].get<double>(), 100 * s["scale_error"].get<double>());
+  }
+  if (s.contains("segments"))
+    for (const auto& g : s["segments"])
+      if (!g["ate_rmse_m"].is_null())
+        std::printf("  segment %.2f-%.2f s, %zu poses: ATE %.4f m on its own\n",
+                    1e-9 * (g["from_t_ns"].get<double>() - s["first_t_ns"].get<double>()),
+                    1e-9 * (g["to_t_ns"].get<double>() - s["first_t_ns"].get<double>()), g["poses"].get<std::size_t>(),
+                    g["ate_rmse_m"].get<double>());
+}
+
 void printSummary(const nlohmann::json& s, const std::string& out) {
   const double seq_s = s["sequence_s"], wall_s = s["wall_s"];
   std::printf("%zu frames (%.1f s) in %.1f s (%.1fx real time), mode %s, %d thread%s (%s)\n",
@@ -164,17 +182,7 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
                 : r["continued_by"] == "extrapolated" ? "went on from the last good state, at constant velocity across the IMU gap"
                 : r["continued_by"] == "held"       ? "went on from the last good state, held across the gap"
                                                     : "started a new trajectory");
-  if (s.contains("ate_rmse_m")) {
-    const double ate = s["ate_rmse_m"], path = s["path_length_m"];
-    std::printf("ATE RMSE (SE3) %.4f m over %.1f m (%.2f%%)\n", ate, path, 100 * ate / path);
-  }
-  if (s.contains("segments"))
-    for (const auto& g : s["segments"])
-      if (!g["ate_rmse_m"].is_null())
-        std::printf("  segment %.2f-%.2f s, %zu poses: ATE %.4f m on its own\n",
-                    1e-9 * (g["from_t_ns"].get<double>() - s["first_t_ns"].get<double>()),
-                    1e-9 * (g["to_t_ns"].get<double>() - s["first_t_ns"].get<double>()), g["poses"].get<std::size_t>(),
-                    g["ate_rmse_m"].get<double>());
+  printAte(s);
   printLoops(s["loop_closure"], s["first_t_ns"].get<TimeNs>());
   std::printf("map: %zu static points, %zu dynamic points\n", s["map_static_points"].get<std::size_t>(),
               s["map_dynamic_points"].get<std::size_t>());

@@ -193,6 +193,12 @@ void addAte(nlohmann::json& summary, const std::vector<StampedPose>& gt, const R
   } catch (const std::exception&) {  // no overlap with the ground truth: no ATE
     return;
   }
+  try {  // evo's -as: what is left once the scale is free, and the scale itself
+    const auto sim3 = eval::computeAte(gt, est, eval::AlignMode::kSim3, 10'000'000);
+    summary["ate_sim3_rmse_m"] = sim3.stats.rmse;
+    summary["scale_error"] = 1.0 / sim3.alignment.s - 1.0;
+  } catch (const std::exception&) {  // degenerate for a similarity (e.g. no motion): SE3 only
+  }
   if (r.loop_enabled && r.loop_trajectory.size() > 2 && (r.loop_stats.map_keyframes == 0 || r.loop_stats.relocalized)) {
     try {
       summary["loop_closure"]["ate_rmse_m"] =

@@ -23,7 +23,9 @@ void writeResultFiles(const std::string& folder, const Result& result);
 nlohmann::json summaryJson(const Result& result, Mode mode, double wall_s);
 
 /// Adds ate_rmse_m (SE3 alignment, stamps associated within 10 ms) and path_length_m
-/// against `groundtruth` to `summary`; adds nothing when the two do not overlap. After
+/// against `groundtruth` to `summary`, and with a similarity alignment (evo's -as)
+/// ate_sim3_rmse_m and scale_error = 1/s − 1 (positive: the estimated path is too long);
+/// adds nothing when the two do not overlap. After
 /// resets, "segments" holds each segment's span and its own ATE too (aligned on its own).
 void addAte(nlohmann::json& summary, const std::vector<StampedPose>& groundtruth, const Result& result);
 
