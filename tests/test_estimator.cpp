@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <random>
 #include <set>
 
 #include "backend/estimator.h"
@@ -409,11 +410,85 @@ TEST(FeatureManager, TriangulationAndReanchoring) {
   fm.triangulate({T0, T1}, rig);
   const Landmark& lm = fm.landmarks().at(7);
   EXPECT_NEAR(1.0 / lm.inv_depth, (cameraPose(T0, rig.T_b_c0).inverse() * p_w).z(), 1e-9);
-  fm.removeOldest(T0, T1, rig);
+  fm.removeOldest({T0, T1}, rig);
   const Landmark& moved = fm.landmarks().at(7);
   EXPECT_EQ(moved.start_frame, 0);
   EXPECT_EQ(moved.obs.size(), 1u);
   EXPECT_NEAR(1.0 / moved.inv_depth, (cameraPose(T1, rig.T_b_c0).inverse() * p_w).z(), 1e-9);
+}
+
+TEST(FeatureManager, TriangulateViewsFindsThePointAndRefusesOneView) {
+  const Vector3d p_w(0.7, -0.4, 9.0);
+  std::vector<Eigen::Isometry3d> T_w_c;
+  std::vector<Vector2d> xy;
+  for (int k = 0; k < 4; ++k) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Vector3d(0.3 * k, 0.05 * k, 0.2 * k);
+    T.linear() = Eigen::AngleAxisd(0.02 * k, Vector3d::UnitY()).toRotationMatrix();
+    const Vector3d p = T.inverse() * p_w;
+    T_w_c.push_back(T);
+    xy.emplace_back(p.x() / p.z(), p.y() / p.z());
+  }
+  const auto found = triangulateViews(T_w_c, xy);
+  ASSERT_TRUE(found.has_value());
+  EXPECT_LT((*found - p_w).norm(), 1e-9);
+  EXPECT_FALSE(triangulateViews({T_w_c[0]}, {xy[0]}).has_value());
+  EXPECT_FALSE(triangulateViews({T_w_c[0], T_w_c[0]}, {xy[0], xy[0]}).has_value());  // no baseline
+  // Observations 0.5 px off (f = 460) in alternating directions: the fit stays within
+  // what the noise allows and sees the point in front of every view.
+  for (std::size_t k = 0; k < xy.size(); ++k) xy[k].x() += (k % 2 ? 0.5 : -0.5) / 460.0;
+  const auto noisy = triangulateViews(T_w_c, xy);
+  ASSERT_TRUE(noisy.has_value());
+  EXPECT_LT((*noisy - p_w).norm(), 0.5);
+  EXPECT_GT((*noisy - p_w).norm(), 1e-6);
+}
+
+TEST(FeatureManager, ReanchoringCanKeepTheMultiViewPointInsteadOfTheNextRay) {
+  // 40 points seen by 8 frames walking forward, every observation 0.3 px noisy (f = 460).
+  // As VINS-Fusion, a re-anchored landmark moves onto its next (noisy) ray at its depth;
+  // with retriangulate it keeps the point that fits all its observations, which the new
+  // anchor ray then points at.
+  Rig rig;
+  rig.T_b_c1.t_b_c = Vector3d(0.11, 0, 0);
+  std::vector<Eigen::Isometry3d> T(8, Eigen::Isometry3d::Identity());
+  for (int k = 0; k < 8; ++k) T[k].translation() = Vector3d(0.02 * k, 0.0, 0.15 * k);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.3 / 460.0);
+  auto observe = [&](const Vector3d& p_w, const Eigen::Isometry3d& T_w_b, const Extrinsic& e) {
+    const Vector3d p = cameraPose(T_w_b, e).inverse() * p_w;
+    return Vector2d(p.x() / p.z() + noise(rng), p.y() / p.z() + noise(rng));
+  };
+  std::vector<Vector3d> points;
+  std::uniform_real_distribution<double> lateral(-3.0, 3.0), depth(5.0, 15.0);
+  for (int i = 0; i < 40; ++i) points.emplace_back(lateral(rng), 0.3 * lateral(rng), depth(rng));
+  std::vector<frontend::FeatureFrame> frames(8);
+  for (int frame = 0; frame < 8; ++frame)
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      frontend::Feature f;
+      f.id = i;
+      f.xy = observe(points[i], T[frame], rig.T_b_c0);
+      f.has_right = true;
+      f.xy_right = observe(points[i], T[frame], rig.T_b_c1);
+      frames[frame].features.push_back(f);
+    }
+  auto meanError = [&](bool retriangulate) {
+    FeatureManager fm;
+    for (int frame = 0; frame < 8; ++frame) fm.addFrame(frame, frames[frame], 10.0, 460.0);
+    fm.triangulate(T, rig);
+    fm.removeOldest(T, rig, retriangulate);
+    double sum = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const Landmark& lm = fm.landmarks().at(i);
+      const Vector2d measured = frames[1].features[i].xy;
+      EXPECT_EQ((lm.obs[0].xy - measured).norm() == 0.0, !retriangulate);  // the ray: measured or estimated
+      const Vector3d p_c(lm.obs[0].xy.x() / lm.inv_depth, lm.obs[0].xy.y() / lm.inv_depth, 1.0 / lm.inv_depth);
+      sum += (cameraPose(T[1], rig.T_b_c0) * p_c - points[i]).norm();
+    }
+    return sum / static_cast<double>(points.size());
+  };
+  const double moved_to_ray = meanError(false), kept = meanError(true);
+  EXPECT_GT(moved_to_ray, 0.05);
+  EXPECT_LT(kept, 0.5 * moved_to_ray);
 }
 
 TEST(FeatureManager, RightMatchesKeptOutOfTheMotionTestsAreStereoObservations) {

@@ -380,6 +380,31 @@ TEST(SimConfig, RealismConfigsRefineRightMatchesAndRaiseTheRemovalBarCleanOnesLe
   EXPECT_NE(text.find("stereo_motion_remove_chi2: 0\n"), std::string::npos) << "clean configs keep the defaults";
 }
 
+TEST(SimDepth, DepthImagesHoldTheRenderersDepthAndLeaveTheImagesAlone) {
+  test::TempDir dir;
+  SimOptions o;
+  o.scene.scene = "city";
+  o.duration_s = 0.1;
+  simulate(o, dir / "plain");
+  o.write_depth = true;
+  simulate(o, dir / "depth");
+  EXPECT_FALSE(fs::exists(dir.path() / "plain/mav0/cam0/depth"));
+  const SceneFrame truth = Scene(o).renderFrame(0);
+  const std::string stamp = std::to_string(o.t0_ns);
+  for (int c = 0; c < 2; ++c) {
+    const fs::path cam = fs::path("mav0") / ("cam" + std::to_string(c));
+    const cv::Mat depth = cv::imread((dir.path() / "depth" / cam / "depth" / (stamp + ".tiff")).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(depth.type(), CV_32FC1) << cam;
+    EXPECT_EQ(cv::norm(depth, truth.cam[c].depth, cv::NORM_INF), 0.0) << cam;
+    double lo = 0, hi = 0;
+    cv::minMaxLoc(depth, &lo, &hi);
+    EXPECT_EQ(lo, 0.0) << "the city's sky";
+    EXPECT_GT(hi, 5.0);
+    const fs::path image = cam / "data" / (stamp + ".png");
+    EXPECT_EQ(test::readFile((dir.path() / "plain" / image).string()), test::readFile((dir.path() / "depth" / image).string()));
+  }
+}
+
 TEST(SimDeterminism, SameArgumentsGiveByteIdenticalFiles) {
   test::TempDir dir;
   SimOptions o;

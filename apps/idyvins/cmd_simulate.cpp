@@ -21,7 +21,7 @@ struct SimulateArgs {
   std::string route = "default";
   double duration = 60.0, noise = 1.0, image_noise = 2.0, td_ms = 0.0;
   int threads = 2;
-  bool opening_vehicle = false, standard_set = false;
+  bool opening_vehicle = false, standard_set = false, depth = false;
   std::string format = "euroc", compression = "none", viode_tables = IDYVINS_VIODE_TABLES;
   std::string realism = "none";
   std::string family = "standard";
@@ -88,6 +88,7 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
   o.image_noise_sigma = a.image_noise;
   o.realism = sim::realismPreset(a.realism);
   o.threads = a.threads;
+  o.write_depth = a.depth;
   ProgressBar bar("simulate " + scene + " " + level, 0, "frames");
   std::size_t total = 0;
   const sim::SimResult r = sim::simulate(o, out, [&](std::size_t done, std::size_t n) {
@@ -110,6 +111,7 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
 
 int runSimulate(const SimulateArgs& a) {
   if (!(a.duration > 0)) throw CLI::ValidationError("--duration", "must be positive");
+  if (a.depth && a.format == "bag") throw CLI::ValidationError("--depth", "depth images go into the EuRoC folder: --format euroc or both");
   if (a.noise < 0) throw CLI::ValidationError("--noise", "must be >= 0");
   if (!a.standard_set) return simulateOne(a, a.scene, a.level, a.out);
   for (const char* scene : {"city", "parking_lot"})
@@ -191,6 +193,9 @@ void registerSimulate(CLI::App& app, int& exit_code) {
                   "folder with VIODE's rgb_ids.txt and vehicle_ids_*.txt (default: the source tree's config/viode)");
   cmd->add_flag("--opening-vehicle", a->opening_vehicle,
                 "a vehicle crosses close in front of the drone during the first seconds");
+  cmd->add_flag("--depth", a->depth,
+                "also write mav0/cam{0,1}/depth/<stamp>.tiff: float32 depth (z, m) per pixel, 0 = sky; for checking\n"
+                "tracks against the scene (scripts/analysis/track_accuracy.py); 1.4 MB per image");
   cmd->add_flag("--standard-set", a->standard_set,
                 "write city and parking_lot x none/low/mid/high into OUT/<scene>_<level>_s<seed>, "
                 "keeping folders that already hold a meta.json");

@@ -732,7 +732,8 @@ void Estimator::marginalizeOldest() {
   if (initialized_) leaving_ = leavingKeyframe();
   for (const auto& [id, lm] : fm_.landmarks())
     if (lm.start_frame == 0 && lm.endFrame() < count_) addToStaticMap(lm);  // leaves the window
-  const Isometry3d T0 = frames_[0].T_w_b(), T1 = frames_[1].T_w_b();
+  std::vector<Isometry3d> T_w_b;  // before the slide
+  for (int i = 0; i <= kWindowSize; ++i) T_w_b.push_back(frames_[i].T_w_b());
   std::unordered_map<double*, double*> remap;
   for (int i = 0; i < kWindowSize; ++i) {
     frames_[i].t_ns = frames_[i + 1].t_ns;
@@ -743,7 +744,7 @@ void Estimator::marginalizeOldest() {
     remap[frames_[i + 1].sb.data()] = frames_[i].sb.data();
   }
   frames_[0].pre.reset();
-  fm_.removeOldest(T0, T1, rig_);
+  fm_.removeOldest(T_w_b, rig_, options_.reanchor_triangulate);
   if (prior_) prior_->remap(remap);
   count_ = kWindowSize - 1;
 }

@@ -37,6 +37,10 @@ struct EstimatorOptions {
   /// VINS-Fusion). Below 1 the prior fades: what frames k keyframes old contributed weighs
   /// prior_fading^k (docs/results.md: the validation family's scale error).
   double prior_fading = 1.0;
+  /// When a landmark's anchor leaves the window: keep the point that best fits all its window
+  /// observations (true), or move it onto its next observation's ray at its estimated depth
+  /// (false, VINS-Fusion). FeatureManager::removeOldest; docs/results.md for both families.
+  bool reanchor_triangulate = false;
 
   // What the integration between two frames can bridge (issue: faults end a segment cleanly).
   /// Two IMU samples farther apart than this between two frames (a dropout, a time jump)
@@ -86,6 +90,8 @@ struct EstimatorOptions {
             clear_after_observations);
     v.param({"prior_fading", "fraction of the prior's information kept per keyframe (1: all)", ParamRule::kFraction},
             prior_fading);
+    v.param({"reanchor_triangulate", "0/1, a re-anchored landmark keeps its multi-view point (1) or takes its next ray (0)"},
+            reanchor_triangulate);
     v.section("Faults: what the integration between two frames bridges (larger gaps reset the window)");
     v.param({"max_imu_gap", "s, largest gap between two IMU samples", ParamRule::kPositive}, max_imu_gap_s);
     v.param({"max_frame_gap", "s, largest gap between two frames", ParamRule::kPositive}, max_frame_gap_s);

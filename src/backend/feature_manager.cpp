@@ -1,5 +1,6 @@
 #include "backend/feature_manager.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/SVD>
 #include <cmath>
 
@@ -11,6 +12,73 @@ using Eigen::Vector3d;
 
 namespace {
 constexpr double kMinDepth = 0.1, kMaxDepth = 80.0;
+constexpr double kReanchorHuberPx = 1.5;  ///< the projection factors' Huber threshold (1 at sigma 1.5 px)
+
+Eigen::Matrix3d skew(const Vector3d& x) {
+  Eigen::Matrix3d m;
+  m << 0, -x.z(), x.y(), x.z(), 0, -x.x(), -x.y(), x.x(), 0;
+  return m;
+}
+
+/// One Gauss-Newton step of triangulateViews (errors above `huber` down-weighted, 0: none);
+/// false when a view sees the point behind it.
+bool refineStep(const std::vector<Isometry3d>& T_w_c, const std::vector<Vector2d>& xy, double huber, Vector3d& p_w) {
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  Vector3d g = Vector3d::Zero();
+  for (std::size_t k = 0; k < T_w_c.size(); ++k) {
+    const Vector3d p = T_w_c[k].inverse() * p_w;
+    if (p.z() < kMinDepth) return false;
+    Eigen::Matrix<double, 2, 3> d_proj;
+    d_proj << 1.0 / p.z(), 0, -p.x() / (p.z() * p.z()), 0, 1.0 / p.z(), -p.y() / (p.z() * p.z());
+    const Eigen::Matrix<double, 2, 3> J = d_proj * T_w_c[k].linear().transpose();
+    const Vector2d r = p.head<2>() / p.z() - xy[k];
+    const double w = huber > 0 && r.norm() > huber ? huber / r.norm() : 1.0;
+    H += w * J.transpose() * J;
+    g += w * J.transpose() * r;
+  }
+  const Vector3d step = H.ldlt().solve(-g);
+  if (!step.allFinite()) return false;
+  p_w += step;
+  return true;
+}
+
+/// triangulateViews over every observation of a landmark in the window, left and right.
+std::optional<Vector3d> triangulateWindow(const Landmark& lm, const std::vector<Isometry3d>& T_w_b, const Rig& rig,
+                                          const Vector3d& start) {
+  std::vector<Isometry3d> T_w_c;
+  std::vector<Vector2d> xy;
+  for (std::size_t k = 0; k < lm.obs.size() && lm.start_frame + k < T_w_b.size(); ++k) {
+    const Isometry3d& T = T_w_b[lm.start_frame + k];
+    T_w_c.push_back(cameraPose(T, rig.T_b_c0));
+    xy.push_back(lm.obs[k].xy);
+    if (!rig.stereo || !lm.obs[k].has_right) continue;
+    T_w_c.push_back(cameraPose(T, rig.T_b_c1));
+    xy.push_back(lm.obs[k].xy_right);
+  }
+  return triangulateViews(T_w_c, xy, start, kReanchorHuberPx / rig.focal_px);
+}
+}  // namespace
+
+std::optional<Vector3d> triangulateViews(const std::vector<Isometry3d>& T_w_c, const std::vector<Vector2d>& xy,
+                                         const std::optional<Vector3d>& start, double huber) {
+  if (T_w_c.size() < 2 || T_w_c.size() != xy.size()) return std::nullopt;
+  // Linear: each view says skew(x) R_c_w (p_w - t_w_c) = 0.
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+  Vector3d b = Vector3d::Zero();
+  for (std::size_t k = 0; k < T_w_c.size(); ++k) {
+    const Eigen::Matrix3d M = skew(Vector3d(xy[k].x(), xy[k].y(), 1.0)) * T_w_c[k].linear().transpose();
+    A += M.transpose() * M;
+    b += M.transpose() * (M * T_w_c[k].translation());
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(A);
+  if (ldlt.info() != Eigen::Success || ldlt.rcond() < 1e-12) return std::nullopt;
+  Vector3d p_w = start ? *start : Vector3d(ldlt.solve(b));
+  for (int iteration = 0; iteration < 5; ++iteration) {
+    const Vector3d before = p_w;
+    if (!p_w.allFinite() || !refineStep(T_w_c, xy, huber, p_w)) return std::nullopt;
+    if ((p_w - before).norm() < 1e-9 * p_w.norm()) break;
+  }
+  return p_w;
 }
 
 Isometry3d cameraPose(const Isometry3d& T_w_b, const Extrinsic& e) {
@@ -109,7 +177,8 @@ void FeatureManager::triangulate(const std::vector<Isometry3d>& T_w_b, const Rig
   }
 }
 
-void FeatureManager::removeOldest(const Isometry3d& T_w_b0, const Isometry3d& T_w_b1, const Rig& rig) {
+void FeatureManager::removeOldest(const std::vector<Isometry3d>& T_w_b, const Rig& rig, bool retriangulate) {
+  const Isometry3d T_w_c0 = cameraPose(T_w_b.at(0), rig.T_b_c0), T_w_c1 = cameraPose(T_w_b.at(1), rig.T_b_c0);
   for (auto it = landmarks_.begin(); it != landmarks_.end();) {
     Landmark& lm = it->second;
     if (lm.start_frame != 0) {
@@ -123,9 +192,16 @@ void FeatureManager::removeOldest(const Isometry3d& T_w_b0, const Isometry3d& T_
     }
     if (lm.inv_depth > 0) {
       const Vector3d p_c0(lm.obs[0].xy.x() / lm.inv_depth, lm.obs[0].xy.y() / lm.inv_depth, 1.0 / lm.inv_depth);
-      const Vector3d p_w = cameraPose(T_w_b0, rig.T_b_c0) * p_c0;
-      const double z = (cameraPose(T_w_b1, rig.T_b_c0).inverse() * p_w).z();
-      lm.inv_depth = z > kMinDepth ? 1.0 / z : -1.0;
+      Vector3d p_c1 = T_w_c1.inverse() * (T_w_c0 * p_c0);
+      if (retriangulate) {
+        const std::optional<Vector3d> p_w = triangulateWindow(lm, T_w_b, rig, T_w_c0 * p_c0);
+        const Vector3d p = p_w ? Vector3d(T_w_c1.inverse() * *p_w) : Vector3d::Zero();
+        if (p.z() > kMinDepth && p.z() < kMaxDepth) {
+          p_c1 = p;
+          lm.obs[1].xy = p.head<2>() / p.z();  // the new anchor ray: the estimate, not the measurement
+        }
+      }
+      lm.inv_depth = p_c1.z() > kMinDepth ? 1.0 / p_c1.z() : -1.0;
     }
     lm.obs.erase(lm.obs.begin());
     ++it;

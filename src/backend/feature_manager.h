@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <set>
 #include <vector>
 
@@ -58,9 +59,13 @@ class FeatureManager {
   /// views of the window. T_w_b holds the window's body poses.
   void triangulate(const std::vector<Eigen::Isometry3d>& T_w_b, const Rig& rig);
 
-  /// After the oldest frame left the window: re-anchors its landmarks in the next
-  /// frame (depth transferred with the poses before the slide) and shifts the rest.
-  void removeOldest(const Eigen::Isometry3d& T_w_b0, const Eigen::Isometry3d& T_w_b1, const Rig& rig);
+  /// After the oldest frame left the window: re-anchors its landmarks in the next frame
+  /// and shifts the rest. T_w_b: the window's body poses before the slide (T_w_b[0] left).
+  /// As VINS-Fusion (retriangulate false), a landmark moves onto its next observation's ray
+  /// at its estimated depth; with retriangulate it keeps the point that best fits all its
+  /// window observations (triangulateViews), so the new anchor ray is an estimate, not the
+  /// one noisy measurement (docs/results.md: re-anchoring and the scale).
+  void removeOldest(const std::vector<Eigen::Isometry3d>& T_w_b, const Rig& rig, bool retriangulate = false);
   /// After the second newest frame (index `frame`) was dropped: removes its observations.
   void removeFrame(int frame);
   /// Drops landmarks by id (outliers, confirmed dynamic).
@@ -82,6 +87,15 @@ class FeatureManager {
 /// by T_w_c1; returns the point in the world.
 Eigen::Vector3d triangulateTwoViews(const Eigen::Isometry3d& T_w_c0, const Eigen::Vector2d& xy0,
                                     const Eigen::Isometry3d& T_w_c1, const Eigen::Vector2d& xy1);
+
+/// The point seen at normalized xy[k] by cameras T_w_c[k] (k ≥ 2): Gauss-Newton on the
+/// normalized-plane errors from `start` (default: the linear solution), errors above
+/// `huber` (normalized units, 0: none) down-weighted as by a Huber loss. Nullopt when the
+/// views do not fix it or it ends up behind one of them.
+std::optional<Eigen::Vector3d> triangulateViews(const std::vector<Eigen::Isometry3d>& T_w_c,
+                                                const std::vector<Eigen::Vector2d>& xy,
+                                                const std::optional<Eigen::Vector3d>& start = std::nullopt,
+                                                double huber = 0.0);
 
 /// T_w_c of a body pose and an extrinsic.
 Eigen::Isometry3d cameraPose(const Eigen::Isometry3d& T_w_b, const Extrinsic& T_b_c);

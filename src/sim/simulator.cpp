@@ -409,10 +409,12 @@ void writeImageLists(const fs::path& mav0, const std::vector<TimeNs>& stamps) {
   writeText(mav0 / "cam1" / "data.csv", csv);
 }
 
-/// Renders every frame into mav0/cam{0,1}/{data,mask}/<stamp>.png on `threads` threads;
-/// returns each frame's share of cam0 pixels on moving objects.
+/// Renders every frame into mav0/cam{0,1}/{data,mask}/<stamp>.png (and depth/<stamp>.tiff
+/// with write_depth) on `threads` threads; returns each frame's share of cam0 pixels on
+/// moving objects.
 std::vector<double> renderImages(const Scene& scene, const std::vector<TimeNs>& stamps, const fs::path& mav0,
                                  int threads, const std::function<void(std::size_t, std::size_t)>& progress) {
+  const bool write_depth = scene.options().write_depth;
   const std::size_t frames = stamps.size();
   std::vector<double> coverage(frames, 0.0);
 
@@ -431,6 +433,9 @@ std::vector<double> renderImages(const Scene& scene, const std::vector<TimeNs>& 
           if (!cv::imwrite((cam / "data" / name).string(), r.image) ||
               !cv::imwrite((cam / "mask" / name).string(), r.mask))
             throw InputError((cam / "data" / name).string(), "cannot write image");
+          const fs::path depth = cam / "depth" / (std::to_string(stamps[k]) + ".tiff");
+          if (write_depth && !cv::imwrite(depth.string(), r.depth))
+            throw InputError(depth.string(), "cannot write depth image");
           if (c == 0) coverage[k] = static_cast<double>(cv::countNonZero(r.mask)) / (r.mask.rows * r.mask.cols);
         }
         ++done;
@@ -464,6 +469,10 @@ SimResult simulate(const SimOptions& o, const std::string& out_dir,
   std::error_code ec;
   for (const char* sub : {"cam0/data", "cam0/mask", "cam1/data", "cam1/mask", "imu0", "state_groundtruth_estimate0"}) {
     fs::create_directories(mav0 / sub, ec);
+    if (ec) throw InputError((mav0 / sub).string(), "cannot create folder: " + ec.message());
+  }
+  for (const char* sub : {"cam0/depth", "cam1/depth"}) {
+    if (o.write_depth) fs::create_directories(mav0 / sub, ec);
     if (ec) throw InputError((mav0 / sub).string(), "cannot create folder: " + ec.message());
   }
   const Scene scene(o);

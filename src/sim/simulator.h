@@ -49,6 +49,9 @@ struct SimOptions {
   /// by default: images as before, with image_noise_sigma Gaussian noise.
   RealismOptions realism;
   int threads = 2;
+  /// Also write each camera's depth: mav0/cam{0,1}/depth/<stamp>.tiff, float32 z in the
+  /// camera frame (m), 0 where no surface (sky); for checking tracks against the scene.
+  bool write_depth = false;
   /// Camera–IMU time offset of the written data (s): each image is stamped with its capture
   /// time on the IMU clock minus td_s (VINS-Fusion: image clock + td = IMU clock).
   double td_s = 0.0;
