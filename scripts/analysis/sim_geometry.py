@@ -14,16 +14,17 @@ def quat_to_R(w, x, y, z):
 
 
 class Rig:
-    """Pinhole cameras without distortion (the validation family's), world-from-camera poses."""
+    """Pinhole cameras with radial-tangential distortion (k1 k2 p1 p2, zero on the validation
+    family), world-from-camera poses."""
 
     def __init__(self, ds):
         c = read_cv_yaml(ds + '/config/sim_stereo_imu_config.yaml')
-        self.K, T_b_c = [], []
+        self.K, self.dist, T_b_c = [], [], []
         for i in range(2):
             cam = read_cv_yaml(ds + f'/config/cam{i}_pinhole.yaml')
-            if any(abs(v) > 1e-12 for v in cam['distortion_parameters'].values()):
-                raise SystemExit(f'{ds}/config/cam{i}_pinhole.yaml: distortion is not modelled here, expected zeros')
+            d = cam['distortion_parameters']
             self.K.append(cam['projection_parameters'])
+            self.dist.append(np.array([d['k1'], d['k2'], d['p1'], d['p2']], float))
             T_b_c.append(np.array(c[f'body_T_cam{i}']['data']).reshape(4, 4))
         gt_file = ds + '/mav0/state_groundtruth_estimate0/data.csv'
         gt = np.loadtxt(gt_file, delimiter=',', comments='#')
@@ -33,13 +34,27 @@ class Rig:
             R_w_b = quat_to_R(*r[4:8])
             self.pose[int(t)] = [(R_w_b @ T[:3, :3], r[1:4] + R_w_b @ T[:3, 3]) for T in T_b_c]
 
+    def distort(self, cam, x, y):
+        k1, k2, p1, p2 = self.dist[cam]
+        r2 = x * x + y * y
+        radial = 1 + k1 * r2 + k2 * r2 * r2
+        return (x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x),
+                y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y)
+
     def project(self, cam, t_ns, p_w):
         """Pixel and depth of world point p_w in camera cam at t_ns."""
         R, p = self.pose[t_ns][cam]
         pc = R.T @ (p_w - p)
         k = self.K[cam]
-        return np.array([k['fx'] * pc[0] / pc[2] + k['cx'], k['fy'] * pc[1] / pc[2] + k['cy']]), pc[2]
+        x, y = self.distort(cam, pc[0] / pc[2], pc[1] / pc[2])
+        return np.array([k['fx'] * x + k['cx'], k['fy'] * y + k['cy']]), pc[2]
 
     def normalized(self, cam, uv):
+        """The undistorted normalized ray (x, y, 1) of pixel uv (fixed-point inversion)."""
         k = self.K[cam]
-        return np.array([(uv[0] - k['cx']) / k['fx'], (uv[1] - k['cy']) / k['fy'], 1.0])
+        xd, yd = (uv[0] - k['cx']) / k['fx'], (uv[1] - k['cy']) / k['fy']
+        x, y = xd, yd
+        for _ in range(20):
+            dx, dy = self.distort(cam, x, y)
+            x, y = x + xd - dx, y + yd - dy
+        return np.array([x, y, 1.0])

@@ -2,7 +2,7 @@
 """How far do the tracker's observations lie from the scene? Checked with the rendered depth.
 
 Usage: scripts/analysis/track_accuracy.py OBS.csv DATASET [FRAMES]   (Debian python3 with numpy, yaml, cv2)
-DATASET is an undistorted render written with `idyvins simulate --depth`; OBS.csv is
+DATASET is a render written with `idyvins simulate --depth`; OBS.csv is
 `idyvins run --dump-observations` of it. Each static track's first observation, lifted with
 the depth image at that pixel (inverse depth interpolated), is the scene point the track
 should follow; its projections with the ground-truth poses are where the later left
