@@ -4,6 +4,8 @@
 #include <Eigen/SVD>
 #include <cmath>
 
+#include "core/so3.h"
+
 namespace idyvins::backend {
 
 using Eigen::Isometry3d;
@@ -13,12 +15,6 @@ using Eigen::Vector3d;
 namespace {
 constexpr double kMinDepth = 0.1, kMaxDepth = 80.0;
 constexpr double kReanchorHuberPx = 1.5;  ///< the projection factors' Huber threshold (1 at sigma 1.5 px)
-
-Eigen::Matrix3d skew(const Vector3d& x) {
-  Eigen::Matrix3d m;
-  m << 0, -x.z(), x.y(), x.z(), 0, -x.x(), -x.y(), x.x(), 0;
-  return m;
-}
 
 /// One Gauss-Newton step of triangulateViews (errors above `huber` down-weighted, 0: none);
 /// false when a view sees the point behind it.
@@ -62,11 +58,11 @@ std::optional<Vector3d> triangulateWindow(const Landmark& lm, const std::vector<
 std::optional<Vector3d> triangulateViews(const std::vector<Isometry3d>& T_w_c, const std::vector<Vector2d>& xy,
                                          const std::optional<Vector3d>& start, double huber) {
   if (T_w_c.size() < 2 || T_w_c.size() != xy.size()) return std::nullopt;
-  // Linear: each view says skew(x) R_c_w (p_w - t_w_c) = 0.
+  // Linear: each view says hat(x) R_c_w (p_w - t_w_c) = 0.
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   Vector3d b = Vector3d::Zero();
   for (std::size_t k = 0; k < T_w_c.size(); ++k) {
-    const Eigen::Matrix3d M = skew(Vector3d(xy[k].x(), xy[k].y(), 1.0)) * T_w_c[k].linear().transpose();
+    const Eigen::Matrix3d M = hat(Vector3d(xy[k].x(), xy[k].y(), 1.0)) * T_w_c[k].linear().transpose();
     A += M.transpose() * M;
     b += M.transpose() * (M * T_w_c[k].translation());
   }

@@ -467,12 +467,10 @@ SimResult simulate(const SimOptions& o, const std::string& out_dir,
   const auto start = std::chrono::steady_clock::now();
   const fs::path root(out_dir), mav0 = root / "mav0";
   std::error_code ec;
-  for (const char* sub : {"cam0/data", "cam0/mask", "cam1/data", "cam1/mask", "imu0", "state_groundtruth_estimate0"}) {
+  std::vector<std::string> subs = {"cam0/data", "cam0/mask", "cam1/data", "cam1/mask", "imu0", "state_groundtruth_estimate0"};
+  if (o.write_depth) subs.insert(subs.end(), {"cam0/depth", "cam1/depth"});
+  for (const std::string& sub : subs) {
     fs::create_directories(mav0 / sub, ec);
-    if (ec) throw InputError((mav0 / sub).string(), "cannot create folder: " + ec.message());
-  }
-  for (const char* sub : {"cam0/depth", "cam1/depth"}) {
-    if (o.write_depth) fs::create_directories(mav0 / sub, ec);
     if (ec) throw InputError((mav0 / sub).string(), "cannot create folder: " + ec.message());
   }
   const Scene scene(o);
