@@ -138,6 +138,7 @@ TEST(Config, EveryKeyLoadReadsIsPrintedAndSaved) {
   Config c = loadConfig(configPath("viode/viode_stereo_imu_config.yaml"));
   MoveAwayFromDefaults away;
   declareParams(away, c);
+  c.estimator.estimate_anchor_ray = false;  // refused with estimate_td (EstimatedAnchorRaysNeedAFixedTimeOffset)
   c.mode = Mode::kIdyBa;
   c.groundtruth_topic = "/odometry";
   c.segmentation_topic = "/cam0/segmentation";
@@ -411,6 +412,16 @@ TEST(Config, AKeyWrittenTwiceIsRefused) {
   expectError([&] { loadConfig(path); }, "cfg.yaml:26: key 'lambda_dy' written twice (first at line 25)");
   expectError([&] { loadConfig(writeConfig(dir, kConfig, std::string(kCamera) + "image_width: 64\n")); },
               "cam.yaml:17: key 'image_width' written twice (first at line 5)");
+}
+
+TEST(Config, EstimatedAnchorRaysNeedAFixedTimeOffset) {
+  TempDir dir;
+  const Config on = loadConfig(writeConfig(dir, std::string(kConfig) + "estimate_anchor_ray: 1\n", kCamera));
+  EXPECT_TRUE(on.estimator.estimate_anchor_ray);
+  EXPECT_FALSE(loadConfig(writeConfig(dir, kConfig, kCamera)).estimator.estimate_anchor_ray);
+  const std::string both = std::string(kConfig) + "estimate_td: 1\nestimate_anchor_ray: 1\n";
+  expectError([&] { loadConfig(writeConfig(dir, both, kCamera)); },
+              "estimate_anchor_ray has no time-offset form: set estimate_td 0 with it");
 }
 
 TEST(Config, ModeNames) {

@@ -124,6 +124,20 @@ TEST(Estimator, ShortCitySequenceEndToEnd) {
   EXPECT_GT(r.non_keyframes, 10);  // second-newest-frame marginalization ran  // the window slid (marginalization ran) many times
 }
 
+TEST(Estimator, EstimatedAnchorRaysSolveAndMarginalizeOnTheShortCitySequence) {
+  // estimate_anchor_ray: three-parameter landmarks through the solves, the oldest-frame
+  // marginalization (their blocks marginalized with the frame) and the re-anchoring.
+  EstimatorOptions o;
+  o.estimate_anchor_ray = true;
+  const RunResult r = runSequence(options("city", 6.0), {}, o);
+  std::printf("city 6 s, estimated anchor rays: ATE %.4f m over %.1f m, %d keyframes, %d resets\n", r.ate, r.path,
+              r.keyframes, r.resets);
+  ASSERT_GE(r.first_init_frame, 0);
+  EXPECT_EQ(r.resets, 0);
+  EXPECT_LT(r.ate, 0.01 * r.path);
+  EXPECT_GT(r.keyframes, 10);
+}
+
 TEST(Estimator, InitializesDespiteAVehicleCrossingCloseInFront) {
   // A truck crosses 5-8 m ahead during the first seconds (up to ~40 % of the view).
   // Initialization itself must stay right: gravity direction and speed at the first
@@ -489,6 +503,45 @@ TEST(FeatureManager, ReanchoringCanKeepTheMultiViewPointInsteadOfTheNextRay) {
   const double moved_to_ray = meanError(false), kept = meanError(true);
   EXPECT_GT(moved_to_ray, 0.05);
   EXPECT_LT(kept, 0.5 * moved_to_ray);
+}
+
+TEST(FeatureManager, AnEstimatedRayKeepsThePointAndTheMeasurementWhenReanchored) {
+  // estimate_anchor_ray: a re-anchored landmark stays where it was (same world point), its
+  // new anchor ray points at it, and the new anchor observation stays the measurement (a
+  // residual in the next solve). Without it the ray is the measurement.
+  Rig rig;
+  rig.T_b_c1.t_b_c = Vector3d(0.11, 0, 0);
+  std::vector<Eigen::Isometry3d> T(3, Eigen::Isometry3d::Identity());
+  for (int k = 0; k < 3; ++k) T[k].translation() = Vector3d(0.05 * k, 0.0, 0.3 * k);
+  const Vector3d p_w(1.0, -0.5, 9.0);
+  auto project = [&](int k, const Vector2d& offset) {
+    const Vector3d p = cameraPose(T[k], rig.T_b_c0).inverse() * p_w;
+    return Vector2d(p.head<2>() / p.z() + offset);
+  };
+  for (bool ray_estimates : {false, true}) {
+    FeatureManager fm;
+    for (int k = 0; k < 3; ++k) {
+      frontend::FeatureFrame ff;
+      frontend::Feature f;
+      f.id = 7;
+      f.xy = project(k, k == 1 ? Vector2d(2e-3, -1e-3) : Vector2d::Zero());  // frame 1: ~1 px off
+      ff.features.push_back(f);
+      fm.addFrame(k, ff, 10.0, 460.0);
+    }
+    Landmark& lm = fm.landmarks().at(7);
+    lm.inv_depth = 1.0 / (cameraPose(T[0], rig.T_b_c0).inverse() * p_w).z();  // the exact depth
+    fm.removeOldest(T, rig, false, ray_estimates);
+    const Landmark& moved = fm.landmarks().at(7);
+    EXPECT_EQ(moved.ray_estimated, ray_estimates);
+    EXPECT_LT((moved.obs[0].xy - project(1, Vector2d(2e-3, -1e-3))).norm(), 1e-15);  // measurement untouched
+    const Vector3d p_after = cameraPose(T[1], rig.T_b_c0) * moved.anchorPoint();
+    if (ray_estimates) {
+      EXPECT_LT((p_after - p_w).norm(), 1e-9);
+      EXPECT_LT((moved.anchorRay() - project(1, Vector2d::Zero())).norm(), 1e-12);
+    } else {
+      EXPECT_GT((p_after - p_w).norm(), 0.01);  // moved onto the noisy ray
+    }
+  }
 }
 
 TEST(FeatureManager, RightMatchesKeptOutOfTheMotionTestsAreStereoObservations) {

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <array>
 #include <random>
 
 #include "backend/imu_factor.h"
@@ -116,6 +117,40 @@ TEST(ProjectionFactors, JacobiansMatchNumericAtRandomStates) {
     test::checkCostFunction(one, {s.pose_i.data(), s.pose_j.data(), &s.inv_depth}, 1e-6, "2f1c");
     test::checkCostFunction(two, {s.pose_i.data(), s.pose_j.data(), &s.inv_depth}, 1e-6, "2f2c");
     test::checkCostFunction(stereo, {&s.inv_depth}, 1e-6, "1f2c");
+  }
+}
+
+TEST(ProjectionFactorsRay, JacobiansMatchNumericAndTheRayAtTheObservationGivesTheFixedRayFactor) {
+  double scale = 2.5;
+  for (int t = 0; t < 50; ++t) {
+    ProjectionSetup s = randomProjection();
+    ProjectionWeight w{460.0, 1.5, t % 2 ? &scale : nullptr};
+    // The landmark block: the anchor ray away from the anchor observation, the inverse depth.
+    std::array<double, 3> lm{s.xy_i.x() + uni(-0.01, 0.01), s.xy_i.y() + uni(-0.01, 0.01), s.inv_depth};
+    ProjectionTwoFrameRay one(s.xy_j, s.ex0, s.ex0, w);
+    ProjectionTwoFrameRay two(s.xy_j_right, s.ex0, s.ex1, w);
+    ProjectionOneFrameTwoCamRay stereo(s.xy_i_right, s.ex0, s.ex1, w);
+    AnchorRayObservation anchor(s.xy_i, w);
+    test::checkCostFunction(one, {s.pose_i.data(), s.pose_j.data(), lm.data()}, 1e-6, "2f1c ray");
+    test::checkCostFunction(two, {s.pose_i.data(), s.pose_j.data(), lm.data()}, 1e-6, "2f2c ray");
+    test::checkCostFunction(stereo, {lm.data()}, 1e-6, "1f2c ray");
+    test::checkCostFunction(anchor, {lm.data()}, 1e-6, "anchor ray");
+    // The anchor residual is the ray's offset from the observation, weighted.
+    Vector2d r;
+    const double* a_params[] = {lm.data()};
+    ASSERT_TRUE(anchor.Evaluate(a_params, r.data(), nullptr));
+    EXPECT_LT((r - w.sqrtInfo() * (Vector2d(lm[0], lm[1]) - s.xy_i)).norm(), 1e-12);
+    // With the ray on the anchor observation the factors are the fixed-ray ones.
+    lm[0] = s.xy_i.x();
+    lm[1] = s.xy_i.y();
+    Vector2d r_ray, r_fixed;
+    const double* ray_params[] = {s.pose_i.data(), s.pose_j.data(), lm.data()};
+    const double* fixed_params[] = {s.pose_i.data(), s.pose_j.data(), &s.inv_depth};
+    ASSERT_TRUE(two.Evaluate(ray_params, r_ray.data(), nullptr));
+    ASSERT_TRUE(ProjectionTwoFrame(s.xy_i, s.xy_j_right, s.ex0, s.ex1, w).Evaluate(fixed_params, r_fixed.data(), nullptr));
+    EXPECT_LT((r_ray - r_fixed).norm(), 1e-12);
+    ASSERT_TRUE(anchor.Evaluate(a_params, r.data(), nullptr));
+    EXPECT_LT(r.norm(), 1e-12);
   }
 }
 

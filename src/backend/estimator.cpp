@@ -49,9 +49,32 @@ struct TdUse {
   std::optional<double> moved_to;
 };
 
-/// The projection factors of one landmark.
+/// The factors of a landmark whose anchor ray is estimated (block: ray x, y, inverse depth):
+/// the anchor observation is a residual like the others.
+std::vector<LandmarkFactor> rayLandmarkFactors(const Landmark& lm, const Rig& rig, const ProjectionWeight& w_static,
+                                               const std::map<int, const double*>& scale_of_frame) {
+  std::vector<LandmarkFactor> out{{std::make_shared<AnchorRayObservation>(lm.obs.front().xy, w_static), -1}};
+  for (std::size_t k = 0; k < lm.obs.size(); ++k) {
+    const Observation& o = lm.obs[k];
+    const int frame = lm.start_frame + static_cast<int>(k);
+    ProjectionWeight w = w_static;
+    const auto it = scale_of_frame.find(frame);
+    if (it != scale_of_frame.end()) w.info_scale = it->second;
+    if (k > 0) out.push_back({std::make_shared<ProjectionTwoFrameRay>(o.xy, rig.T_b_c0, rig.T_b_c0, w), frame});
+    if (!rig.stereo || !o.has_right) continue;
+    if (k > 0)
+      out.push_back({std::make_shared<ProjectionTwoFrameRay>(o.xy_right, rig.T_b_c0, rig.T_b_c1, w), frame});
+    else
+      out.push_back({std::make_shared<ProjectionOneFrameTwoCamRay>(o.xy_right, rig.T_b_c0, rig.T_b_c1, w_static), -1});
+  }
+  return out;
+}
+
+/// The projection factors of one landmark; with `ray`, those of its estimated-ray form.
 std::vector<LandmarkFactor> landmarkFactors(const Landmark& lm, const Rig& rig, const ProjectionWeight& w_static,
-                                            const TdUse& td, const std::map<int, const double*>& scale_of_frame = {}) {
+                                            const TdUse& td, const std::map<int, const double*>& scale_of_frame = {},
+                                            bool ray = false) {
+  if (ray) return rayLandmarkFactors(lm, rig, w_static, scale_of_frame);
   std::vector<LandmarkFactor> out;
   const Observation& a = lm.obs.front();
   auto at = [&](const TimedObservation& o) -> Vector2d {
@@ -350,9 +373,7 @@ bool Estimator::pnp(int n) {
   std::vector<std::uint64_t> ids;
   for (const auto& [id, lm] : fm_.landmarks()) {
     if (lm.inv_depth <= 0 || lm.start_frame >= n || lm.endFrame() != n) continue;
-    const Observation& a = lm.obs.front();
-    const Vector3d p_c(a.xy.x() / lm.inv_depth, a.xy.y() / lm.inv_depth, 1.0 / lm.inv_depth);
-    const Vector3d p_w = cameraPose(frames_[lm.start_frame].T_w_b(), rig_.T_b_c0) * p_c;
+    const Vector3d p_w = cameraPose(frames_[lm.start_frame].T_w_b(), rig_.T_b_c0) * lm.anchorPoint();
     obj.emplace_back(p_w.x(), p_w.y(), p_w.z());
     img.emplace_back(lm.obs.back().xy.x(), lm.obs.back().xy.y());
     ids.push_back(id);
@@ -458,6 +479,7 @@ void Estimator::optimize(FrameResult& r) {
   ceres::Solver::Summary summary;
   ceres::Solve(o, &problem, &summary);
   const auto post_start = std::chrono::steady_clock::now();
+  if (estimatesRays()) storeRays();
   if (options_.fix_gauge) restoreGauge(T_w_b0_before);
   for (int i = 1; i <= count_; ++i) {
     const imu::NavState s = frames_[i - 1].nav();
@@ -517,7 +539,12 @@ int Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_p
 std::vector<double*> Estimator::factorBlocks(Landmark& lm, int frame, bool with_td) {
   std::vector<double*> blocks;
   if (frame >= 0) blocks = {frames_[lm.start_frame].pose.data(), frames_[frame].pose.data()};
-  blocks.push_back(&lm.inv_depth);
+  if (estimatesRays()) {
+    lm.ray_block = {lm.anchorRay().x(), lm.anchorRay().y(), lm.inv_depth};
+    blocks.push_back(lm.ray_block.data());
+  } else {
+    blocks.push_back(&lm.inv_depth);
+  }
   if (with_td) blocks.push_back(&td_s_);
   return blocks;
 }
@@ -539,12 +566,22 @@ int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_p
         scale_of_frame[weights.back().frame] = &weights.back().info;
       }
     }
-    for (const auto& lf : landmarkFactors(lm, rig_, w, TdUse{estimatesTd(), std::nullopt}, scale_of_frame)) {
+    for (const auto& lf :
+         landmarkFactors(lm, rig_, w, TdUse{estimatesTd(), std::nullopt}, scale_of_frame, estimatesRays())) {
       costs.push_back(lf.cost);
       problem.AddResidualBlock(lf.cost.get(), &huber, factorBlocks(lm, lf.frame, estimatesTd()));
     }
   }
   return used;
+}
+
+void Estimator::storeRays() {
+  for (auto& [id, lm] : fm_.landmarks()) {
+    if (!lm.usable() || !std::isfinite(lm.inv_depth)) continue;  // as addProjections: in the solve
+    lm.ray_estimated = true;
+    lm.ray_xy = Vector2d(lm.ray_block[0], lm.ray_block[1]);
+    lm.inv_depth = lm.ray_block[2];
+  }
 }
 
 void Estimator::refreshWeights(std::deque<CandidateWeight>& weights) const {
@@ -571,9 +608,7 @@ void Estimator::restoreGauge(const Isometry3d& T_w_b0_before) {
 }
 
 Vector3d Estimator::landmarkWorld(const Landmark& lm) const {
-  const Observation& a = lm.obs.front();
-  const Vector3d p_c(a.xy.x() / lm.inv_depth, a.xy.y() / lm.inv_depth, 1.0 / lm.inv_depth);
-  return cameraPose(frames_[lm.start_frame].T_w_b(), rig_.T_b_c0) * p_c;
+  return cameraPose(frames_[lm.start_frame].T_w_b(), rig_.T_b_c0) * lm.anchorPoint();
 }
 
 LeavingKeyframe Estimator::leavingKeyframe() const {
@@ -608,8 +643,7 @@ void Estimator::flushMap() {
 }
 
 double Estimator::meanReprojectionErrorPx(const Landmark& lm, int last_n) const {
-  const Observation& a = lm.obs.front();
-  const Vector3d pts_i(a.xy.x(), a.xy.y(), 1.0);
+  const Vector3d pts_i(lm.anchorRay().x(), lm.anchorRay().y(), 1.0);
   const imu::NavState si = frames_[lm.start_frame].nav();
   const std::size_t first =
       last_n > 0 ? std::max<std::size_t>(1, lm.obs.size() - std::min<std::size_t>(last_n, lm.obs.size())) : 1;
@@ -722,7 +756,7 @@ void Estimator::marginalizeOldest() {
       // The prior keeps no information on the time offset: the marginalized observations are
       // moved to the current estimate (measured: a prior that kept it held td near its first values).
       const TdUse td = estimatesTd() ? TdUse{false, td_s_} : TdUse{};
-      for (const auto& lf : landmarkFactors(lm, rig_, w, td))
+      for (const auto& lf : landmarkFactors(lm, rig_, w, td, {}, estimatesRays()))
         m.add({lf.cost, huber, factorBlocks(lm, lf.frame, false), lf.frame < 0 ? std::vector<int>{0} : std::vector<int>{0, 2}});
     }
     prior_ = std::make_shared<MarginalizationPrior>(m.marginalize());
@@ -744,7 +778,7 @@ void Estimator::marginalizeOldest() {
     remap[frames_[i + 1].sb.data()] = frames_[i].sb.data();
   }
   frames_[0].pre.reset();
-  fm_.removeOldest(T_w_b, rig_, options_.reanchor_triangulate);
+  fm_.removeOldest(T_w_b, rig_, options_.reanchor_triangulate, estimatesRays());
   if (prior_) prior_->remap(remap);
   count_ = kWindowSize - 1;
 }

@@ -182,6 +182,10 @@ class Estimator {
   /// anchor frame), the td block last when `with_td`.
   std::vector<double*> factorBlocks(Landmark& lm, int frame, bool with_td);
   bool estimatesTd() const { return options_.estimate_td; }
+  /// Landmarks estimate their anchor rays (estimate_anchor_ray; the config refuses it with estimate_td).
+  bool estimatesRays() const { return options_.estimate_anchor_ray && !options_.estimate_td; }
+  /// After a solve with estimated rays: the solver blocks back into the landmarks.
+  void storeRays();
   void refreshWeights(std::deque<CandidateWeight>& weights) const;
   /// Moves the window back so that its oldest frame keeps its yaw and position (backend/gauge.h).
   void restoreGauge(const Eigen::Isometry3d& T_w_b0_before);

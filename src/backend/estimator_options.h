@@ -41,6 +41,11 @@ struct EstimatorOptions {
   /// observations (true), or move it onto its next observation's ray at its estimated depth
   /// (false, VINS-Fusion). FeatureManager::removeOldest; docs/results.md for both families.
   bool reanchor_triangulate = false;
+  /// Each landmark estimates its anchor ray with its inverse depth (3 parameters) and its
+  /// anchor observation is a residual like the others, so re-anchoring keeps the point and
+  /// takes no measurement as exact (false: the ray is the anchor observation, VINS-Fusion).
+  /// Not with estimate_td (a config error). docs/results.md for every family.
+  bool estimate_anchor_ray = false;
 
   // What the integration between two frames can bridge (issue: faults end a segment cleanly).
   /// Two IMU samples farther apart than this between two frames (a dropout, a time jump)
@@ -92,6 +97,8 @@ struct EstimatorOptions {
             prior_fading);
     v.param({"reanchor_triangulate", "0/1, a re-anchored landmark keeps its multi-view point (1) or takes its next ray (0)"},
             reanchor_triangulate);
+    v.param({"estimate_anchor_ray", "0/1, landmarks estimate their anchor ray (3 parameters; needs estimate_td 0)"},
+            estimate_anchor_ray);
     v.section("Faults: what the integration between two frames bridges (larger gaps reset the window)");
     v.param({"max_imu_gap", "s, largest gap between two IMU samples", ParamRule::kPositive}, max_imu_gap_s);
     v.param({"max_frame_gap", "s, largest gap between two frames", ParamRule::kPositive}, max_frame_gap_s);

@@ -173,7 +173,8 @@ void FeatureManager::triangulate(const std::vector<Isometry3d>& T_w_b, const Rig
   }
 }
 
-void FeatureManager::removeOldest(const std::vector<Isometry3d>& T_w_b, const Rig& rig, bool retriangulate) {
+void FeatureManager::removeOldest(const std::vector<Isometry3d>& T_w_b, const Rig& rig, bool retriangulate,
+                                  bool ray_estimates) {
   const Isometry3d T_w_c0 = cameraPose(T_w_b.at(0), rig.T_b_c0), T_w_c1 = cameraPose(T_w_b.at(1), rig.T_b_c0);
   for (auto it = landmarks_.begin(); it != landmarks_.end();) {
     Landmark& lm = it->second;
@@ -187,7 +188,7 @@ void FeatureManager::removeOldest(const std::vector<Isometry3d>& T_w_b, const Ri
       continue;
     }
     if (lm.inv_depth > 0) {
-      const Vector3d p_c0(lm.obs[0].xy.x() / lm.inv_depth, lm.obs[0].xy.y() / lm.inv_depth, 1.0 / lm.inv_depth);
+      const Vector3d p_c0 = lm.anchorPoint();
       Vector3d p_c1 = T_w_c1.inverse() * (T_w_c0 * p_c0);
       if (retriangulate) {
         const std::optional<Vector3d> p_w = triangulateWindow(lm, T_w_b, rig, T_w_c0 * p_c0);
@@ -198,6 +199,10 @@ void FeatureManager::removeOldest(const std::vector<Isometry3d>& T_w_b, const Ri
         }
       }
       lm.inv_depth = p_c1.z() > kMinDepth ? 1.0 / p_c1.z() : -1.0;
+      lm.ray_estimated = ray_estimates && lm.inv_depth > 0;
+      if (lm.ray_estimated) lm.ray_xy = p_c1.head<2>() / p_c1.z();
+    } else {
+      lm.ray_estimated = false;
     }
     lm.obs.erase(lm.obs.begin());
     ++it;
@@ -215,6 +220,7 @@ void FeatureManager::removeFrame(int frame) {
       }
       lm.obs.erase(lm.obs.begin());  // the newest frame (index frame + 1) becomes index frame
       lm.inv_depth = -1.0;           // re-triangulate in the new anchor
+      lm.ray_estimated = false;
     } else if (lm.start_frame < frame && lm.endFrame() >= frame) {
       lm.obs.erase(lm.obs.begin() + (frame - lm.start_frame));
     } else if (lm.start_frame > frame) {

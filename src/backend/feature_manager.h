@@ -3,6 +3,7 @@
 // depth in the anchor (first observing) frame's left camera, labels, triangulation.
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -33,6 +34,15 @@ struct Landmark {
   double inv_depth = -1.0;  ///< ≤ 0: not triangulated
   FeatureLabel label = FeatureLabel::kStatic;
   int candidate_obs = 0;  ///< observations since it was (last) marked candidate (DESIGN §4.4, §4.6)
+  /// With estimate_anchor_ray: the anchor ray's point on the normalized plane, an estimate
+  /// (ray_estimated) once a solve or a re-anchoring has set it; else the anchor observation.
+  bool ray_estimated = false;
+  Eigen::Vector2d ray_xy = Eigen::Vector2d::Zero();
+  /// The solver's block (ray x, y, inverse depth) while a solve with estimated rays runs.
+  std::array<double, 3> ray_block{};
+  Eigen::Vector2d anchorRay() const { return ray_estimated ? ray_xy : obs.front().xy; }
+  /// The point in the anchor (left) camera.
+  Eigen::Vector3d anchorPoint() const { return Eigen::Vector3d(anchorRay().x(), anchorRay().y(), 1.0) / inv_depth; }
   int endFrame() const { return start_frame + static_cast<int>(obs.size()) - 1; }
   bool usable() const { return inv_depth > 0 && (obs.size() >= 2 || obs.front().has_right); }
 };
@@ -65,7 +75,10 @@ class FeatureManager {
   /// at its estimated depth; with retriangulate it keeps the point that best fits all its
   /// window observations (triangulateViews), so the new anchor ray is an estimate, not the
   /// one noisy measurement (docs/results.md: re-anchoring and the scale).
-  void removeOldest(const std::vector<Eigen::Isometry3d>& T_w_b, const Rig& rig, bool retriangulate = false);
+  /// With ray_estimates the point stays where it is and the new anchor ray is its direction,
+  /// an estimate the next solve refines against the new anchor's observation (a residual).
+  void removeOldest(const std::vector<Eigen::Isometry3d>& T_w_b, const Rig& rig, bool retriangulate = false,
+                    bool ray_estimates = false);
   /// After the second newest frame (index `frame`) was dropped: removes its observations.
   void removeFrame(int frame);
   /// Drops landmarks by id (outliers, confirmed dynamic).

@@ -195,4 +195,70 @@ bool ProjectionOneFrameTwoCamTd::Evaluate(double const* const* parameters, doubl
   return true;
 }
 
+AnchorRayObservation::AnchorRayObservation(const Vector2d& xy, const ProjectionWeight& weight)
+    : xy_(xy), weight_(weight) {}
+
+bool AnchorRayObservation::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  const double sqrt_info = weight_.sqrtInfo();
+  Eigen::Map<Vector2d> r(residuals);
+  r = sqrt_info * (Eigen::Map<const Vector2d>(parameters[0]) - xy_);
+  if (jacobians && jacobians[0]) {
+    Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> J(jacobians[0]);
+    J.setZero();
+    J(0, 0) = J(1, 1) = sqrt_info;
+  }
+  return true;
+}
+
+ProjectionTwoFrameRay::ProjectionTwoFrameRay(const Vector2d& xy_j, const Extrinsic& T_b_c0, const Extrinsic& T_b_cb,
+                                             const ProjectionWeight& weight)
+    : pts_j_(homogeneous(xy_j)), ex0_(T_b_c0), exb_(T_b_cb), weight_(weight) {}
+
+bool ProjectionTwoFrameRay::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  // The fixed-ray factor at the current ray, its inverse-depth Jacobian the block's third
+  // column; the ray's columns: d pts_cam_j / d pts_i = R_cj_ci / ρ (its x and y columns).
+  const Vector3d pts_i(parameters[2][0], parameters[2][1], 1.0);
+  const double* fixed_ray[3] = {parameters[0], parameters[1], parameters[2] + 2};
+  Vector2d J_rho;
+  double* fixed_jac[3] = {jacobians ? jacobians[0] : nullptr, jacobians ? jacobians[1] : nullptr,
+                          jacobians && jacobians[2] ? J_rho.data() : nullptr};
+  if (!evaluateTwoFrame(pts_i, pts_j_, ex0_, exb_, weight_, fixed_ray, residuals, jacobians ? fixed_jac : nullptr))
+    return false;
+  if (!jacobians || !jacobians[2]) return true;
+  const Eigen::Map<const Vector3d> Pi(parameters[0]);
+  const Quaterniond Qi = Eigen::Map<const Quaterniond>(parameters[0] + 3).normalized();
+  const Eigen::Map<const Vector3d> Pj(parameters[1]);
+  const Quaterniond Qj = Eigen::Map<const Quaterniond>(parameters[1] + 3).normalized();
+  const double inv_dep = parameters[2][2];
+  const Vector3d pts_cam_j = transferPoint(pts_i, inv_dep, Pi, Qi, Pj, Qj, ex0_, exb_);
+  const Matrix3d R_cj_ci = exb_.q_b_c.conjugate().toRotationMatrix() * Qj.conjugate().toRotationMatrix() *
+                           Qi.toRotationMatrix() * ex0_.q_b_c.toRotationMatrix();
+  Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> J(jacobians[2]);
+  J.leftCols<2>() = (reduceJacobian(pts_cam_j, weight_.sqrtInfo()) * R_cj_ci).leftCols<2>() / inv_dep;
+  J.col(2) = J_rho;
+  return true;
+}
+
+ProjectionOneFrameTwoCamRay::ProjectionOneFrameTwoCamRay(const Vector2d& xy_right, const Extrinsic& T_b_c0,
+                                                         const Extrinsic& T_b_c1, const ProjectionWeight& weight)
+    : pts_j_(homogeneous(xy_right)), ex0_(T_b_c0), ex1_(T_b_c1), weight_(weight) {}
+
+bool ProjectionOneFrameTwoCamRay::Evaluate(double const* const* parameters, double* residuals,
+                                           double** jacobians) const {
+  const Vector3d pts_i(parameters[0][0], parameters[0][1], 1.0);
+  const double* fixed_ray[1] = {parameters[0] + 2};
+  Vector2d J_rho;
+  double* fixed_jac[1] = {jacobians && jacobians[0] ? J_rho.data() : nullptr};
+  if (!evaluateOneFrameTwoCam(pts_i, pts_j_, ex0_, ex1_, weight_, fixed_ray, residuals, jacobians ? fixed_jac : nullptr))
+    return false;
+  if (!jacobians || !jacobians[0]) return true;
+  const double inv_dep = parameters[0][2];
+  const Vector3d pts_cam_j = ex1_.q_b_c.conjugate() * (ex0_.q_b_c * (pts_i / inv_dep) + ex0_.t_b_c - ex1_.t_b_c);
+  const Matrix3d R_c1_c0 = ex1_.q_b_c.conjugate().toRotationMatrix() * ex0_.q_b_c.toRotationMatrix();
+  Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> J(jacobians[0]);
+  J.leftCols<2>() = (reduceJacobian(pts_cam_j, weight_.sqrtInfo()) * R_c1_c0).leftCols<2>() / inv_dep;
+  J.col(2) = J_rho;
+  return true;
+}
+
 }  // namespace idyvins::backend

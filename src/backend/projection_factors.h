@@ -97,6 +97,50 @@ class ProjectionOneFrameTwoCamTd final : public ceres::SizedCostFunction<2, 1, 1
   ProjectionWeight weight_;
 };
 
+/// Landmarks whose anchor ray is estimated (EstimatorOptions::estimate_anchor_ray): one block
+/// of 3, the ray's point (x, y) on the anchor left camera's normalized plane and the inverse
+/// depth along it, so no observation is taken as exact. The anchor observation's own
+/// residual: sqrt_info · (ray − xy). Block: landmark (3).
+class AnchorRayObservation final : public ceres::SizedCostFunction<2, 3> {
+ public:
+  AnchorRayObservation(const Eigen::Vector2d& xy, const ProjectionWeight& weight);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  Eigen::Vector2d xy_;
+  ProjectionWeight weight_;
+};
+
+/// ProjectionTwoFrame of a landmark with an estimated anchor ray. Blocks: pose_i (7),
+/// pose_j (7), landmark (3: ray x, y, inverse depth).
+class ProjectionTwoFrameRay final : public ceres::SizedCostFunction<2, 7, 7, 3> {
+ public:
+  ProjectionTwoFrameRay(const Eigen::Vector2d& xy_j, const Extrinsic& T_b_c0, const Extrinsic& T_b_cb,
+                        const ProjectionWeight& weight);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  Eigen::Vector3d pts_j_;
+  Extrinsic ex0_, exb_;
+  ProjectionWeight weight_;
+};
+
+/// ProjectionOneFrameTwoCam of a landmark with an estimated anchor ray. Block: landmark (3).
+class ProjectionOneFrameTwoCamRay final : public ceres::SizedCostFunction<2, 3> {
+ public:
+  ProjectionOneFrameTwoCamRay(const Eigen::Vector2d& xy_right, const Extrinsic& T_b_c0, const Extrinsic& T_b_c1,
+                              const ProjectionWeight& weight);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  Eigen::Vector3d pts_j_;
+  Extrinsic ex0_, ex1_;
+  ProjectionWeight weight_;
+};
+
 /// Normalized-plane reprojection of the anchor observation (xy_i, inverse depth)
 /// from pose_i/camera a into pose_j/camera b; the pure math shared by the factors
 /// and by outlier checks. Returns the 3D point in camera b.

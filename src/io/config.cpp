@@ -367,6 +367,9 @@ void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
   if (c.idy.lambda_dy_c > c.idy.lambda_dy)
     throw InputError(f.path, "lambda_dy_c (" + std::to_string(c.idy.lambda_dy_c) + ") must not exceed lambda_dy (" +
                                  std::to_string(c.idy.lambda_dy) + ")");
+  if (c.estimator.estimate_anchor_ray && c.estimator.estimate_td)
+    throw InputError(f.path, lineOf(f.root["estimate_anchor_ray"]),
+                     "estimate_anchor_ray has no time-offset form: set estimate_td 0 with it");
   const fs::path folder = fs::path(f.path).parent_path();
   for (std::string* table : {&c.segmentation_rgb_ids, &c.segmentation_vehicle_ids})
     if (!table->empty() && fs::path(*table).is_relative()) *table = (folder / *table).string();
