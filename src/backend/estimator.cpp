@@ -107,6 +107,9 @@ std::vector<LandmarkFactor> landmarkFactors(const Landmark& lm, const Rig& rig, 
   return out;
 }
 
+/// A landmark the window's solve uses (addProjections; storeRays reads back the same set).
+bool inSolve(const Landmark& lm) { return lm.usable() && std::isfinite(lm.inv_depth); }
+
 const PoseManifold kPoseManifold;
 }  // namespace
 
@@ -555,7 +558,7 @@ int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_p
   const ProjectionWeight w{rig_.focal_px, options_.sigma_px, nullptr};
   int used = 0;
   for (auto& [id, lm] : fm_.landmarks()) {
-    if (!lm.usable() || !std::isfinite(lm.inv_depth)) continue;
+    if (!inSolve(lm)) continue;
     ++used;
     const bool candidate = options_.candidate_weights && lm.label == FeatureLabel::kCandidate;
     candidates += candidate;
@@ -577,7 +580,7 @@ int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_p
 
 void Estimator::storeRays() {
   for (auto& [id, lm] : fm_.landmarks()) {
-    if (!lm.usable() || !std::isfinite(lm.inv_depth)) continue;  // as addProjections: in the solve
+    if (!inSolve(lm)) continue;
     lm.ray_estimated = true;
     lm.ray_xy = Vector2d(lm.ray_block[0], lm.ray_block[1]);
     lm.inv_depth = lm.ray_block[2];

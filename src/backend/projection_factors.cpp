@@ -46,10 +46,12 @@ ProjectionTwoFrame::ProjectionTwoFrame(const Vector2d& xy_i, const Vector2d& xy_
 
 namespace {
 
-/// ProjectionTwoFrame's residual and Jacobians for homogeneous observations pts_i, pts_j.
+/// ProjectionTwoFrame's residual and Jacobians for homogeneous observations pts_i, pts_j;
+/// with jacobians and d_pts_i, also the residual's Jacobian by the anchor point pts_i
+/// (R_cj_ci / ρ through the projection), for the estimated-ray factors.
 bool evaluateTwoFrame(const Vector3d& pts_i, const Vector3d& pts_j, const Extrinsic& ex0, const Extrinsic& exb,
                       const ProjectionWeight& weight, double const* const* parameters, double* residuals,
-                      double** jacobians) {
+                      double** jacobians, Eigen::Matrix<double, 2, 3>* d_pts_i = nullptr) {
   const Eigen::Map<const Vector3d> Pi(parameters[0]);
   const Quaterniond Qi = Eigen::Map<const Quaterniond>(parameters[0] + 3).normalized();
   const Eigen::Map<const Vector3d> Pj(parameters[1]);
@@ -91,6 +93,7 @@ bool evaluateTwoFrame(const Vector3d& pts_i, const Vector3d& pts_j, const Extrin
     Eigen::Map<Vector2d> J(jacobians[2]);
     J = reduce * Rb_cb_T * Rj.transpose() * Ri * Rca_b * pts_i * (-1.0 / (inv_dep * inv_dep));
   }
+  if (d_pts_i) *d_pts_i = reduce * Rb_cb_T * Rj.transpose() * Ri * Rca_b / inv_dep;
   return true;
 }
 
@@ -110,10 +113,11 @@ ProjectionOneFrameTwoCam::ProjectionOneFrameTwoCam(const Vector2d& xy_left, cons
 
 namespace {
 
-/// ProjectionOneFrameTwoCam's residual and Jacobian for homogeneous observations pts_i, pts_j.
+/// ProjectionOneFrameTwoCam's residual and Jacobian for homogeneous observations pts_i, pts_j;
+/// with jacobians and d_pts_i, also the Jacobian by the anchor point pts_i (as evaluateTwoFrame).
 bool evaluateOneFrameTwoCam(const Vector3d& pts_i, const Vector3d& pts_j, const Extrinsic& ex0, const Extrinsic& ex1,
                             const ProjectionWeight& weight, double const* const* parameters, double* residuals,
-                            double** jacobians) {
+                            double** jacobians, Eigen::Matrix<double, 2, 3>* d_pts_i = nullptr) {
   const double inv_dep = parameters[0][0];
   const Vector3d pts_imu = ex0.q_b_c * (pts_i / inv_dep) + ex0.t_b_c;
   const Vector3d pts_cam_j = ex1.q_b_c.conjugate() * (pts_imu - ex1.t_b_c);
@@ -125,6 +129,9 @@ bool evaluateOneFrameTwoCam(const Vector3d& pts_i, const Vector3d& pts_j, const 
     J = reduceJacobian(pts_cam_j, sqrt_info) * ex1.q_b_c.conjugate().toRotationMatrix() *
         ex0.q_b_c.toRotationMatrix() * pts_i * (-1.0 / (inv_dep * inv_dep));
   }
+  if (jacobians && d_pts_i)
+    *d_pts_i = reduceJacobian(pts_cam_j, sqrt_info) * ex1.q_b_c.conjugate().toRotationMatrix() *
+               ex0.q_b_c.toRotationMatrix() / inv_dep;
   return true;
 }
 
@@ -215,26 +222,21 @@ ProjectionTwoFrameRay::ProjectionTwoFrameRay(const Vector2d& xy_j, const Extrins
     : pts_j_(homogeneous(xy_j)), ex0_(T_b_c0), exb_(T_b_cb), weight_(weight) {}
 
 bool ProjectionTwoFrameRay::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
-  // The fixed-ray factor at the current ray, its inverse-depth Jacobian the block's third
-  // column; the ray's columns: d pts_cam_j / d pts_i = R_cj_ci / ρ (its x and y columns).
+  // The fixed-ray factor at the current ray: its inverse-depth Jacobian is the block's third
+  // column, the x and y columns of its anchor-point Jacobian the ray's.
   const Vector3d pts_i(parameters[2][0], parameters[2][1], 1.0);
   const double* fixed_ray[3] = {parameters[0], parameters[1], parameters[2] + 2};
+  const bool want_ray = jacobians && jacobians[2];
   Vector2d J_rho;
+  Eigen::Matrix<double, 2, 3> J_pts_i;
   double* fixed_jac[3] = {jacobians ? jacobians[0] : nullptr, jacobians ? jacobians[1] : nullptr,
-                          jacobians && jacobians[2] ? J_rho.data() : nullptr};
-  if (!evaluateTwoFrame(pts_i, pts_j_, ex0_, exb_, weight_, fixed_ray, residuals, jacobians ? fixed_jac : nullptr))
+                          want_ray ? J_rho.data() : nullptr};
+  if (!evaluateTwoFrame(pts_i, pts_j_, ex0_, exb_, weight_, fixed_ray, residuals, jacobians ? fixed_jac : nullptr,
+                        want_ray ? &J_pts_i : nullptr))
     return false;
-  if (!jacobians || !jacobians[2]) return true;
-  const Eigen::Map<const Vector3d> Pi(parameters[0]);
-  const Quaterniond Qi = Eigen::Map<const Quaterniond>(parameters[0] + 3).normalized();
-  const Eigen::Map<const Vector3d> Pj(parameters[1]);
-  const Quaterniond Qj = Eigen::Map<const Quaterniond>(parameters[1] + 3).normalized();
-  const double inv_dep = parameters[2][2];
-  const Vector3d pts_cam_j = transferPoint(pts_i, inv_dep, Pi, Qi, Pj, Qj, ex0_, exb_);
-  const Matrix3d R_cj_ci = exb_.q_b_c.conjugate().toRotationMatrix() * Qj.conjugate().toRotationMatrix() *
-                           Qi.toRotationMatrix() * ex0_.q_b_c.toRotationMatrix();
+  if (!want_ray) return true;
   Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> J(jacobians[2]);
-  J.leftCols<2>() = (reduceJacobian(pts_cam_j, weight_.sqrtInfo()) * R_cj_ci).leftCols<2>() / inv_dep;
+  J.leftCols<2>() = J_pts_i.leftCols<2>();
   J.col(2) = J_rho;
   return true;
 }
@@ -247,16 +249,16 @@ bool ProjectionOneFrameTwoCamRay::Evaluate(double const* const* parameters, doub
                                            double** jacobians) const {
   const Vector3d pts_i(parameters[0][0], parameters[0][1], 1.0);
   const double* fixed_ray[1] = {parameters[0] + 2};
+  const bool want_ray = jacobians && jacobians[0];
   Vector2d J_rho;
-  double* fixed_jac[1] = {jacobians && jacobians[0] ? J_rho.data() : nullptr};
-  if (!evaluateOneFrameTwoCam(pts_i, pts_j_, ex0_, ex1_, weight_, fixed_ray, residuals, jacobians ? fixed_jac : nullptr))
+  Eigen::Matrix<double, 2, 3> J_pts_i;
+  double* fixed_jac[1] = {want_ray ? J_rho.data() : nullptr};
+  if (!evaluateOneFrameTwoCam(pts_i, pts_j_, ex0_, ex1_, weight_, fixed_ray, residuals, want_ray ? fixed_jac : nullptr,
+                              want_ray ? &J_pts_i : nullptr))
     return false;
-  if (!jacobians || !jacobians[0]) return true;
-  const double inv_dep = parameters[0][2];
-  const Vector3d pts_cam_j = ex1_.q_b_c.conjugate() * (ex0_.q_b_c * (pts_i / inv_dep) + ex0_.t_b_c - ex1_.t_b_c);
-  const Matrix3d R_c1_c0 = ex1_.q_b_c.conjugate().toRotationMatrix() * ex0_.q_b_c.toRotationMatrix();
+  if (!want_ray) return true;
   Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> J(jacobians[0]);
-  J.leftCols<2>() = (reduceJacobian(pts_cam_j, weight_.sqrtInfo()) * R_c1_c0).leftCols<2>() / inv_dep;
+  J.leftCols<2>() = J_pts_i.leftCols<2>();
   J.col(2) = J_rho;
   return true;
 }
