@@ -424,6 +424,16 @@ TEST(Config, EstimatedAnchorRaysNeedAFixedTimeOffset) {
               "estimate_anchor_ray has no time-offset form: set estimate_td 0 with it");
 }
 
+TEST(Config, TrackDropoutIsAShareOfAThousand) {
+  TempDir dir;
+  const Config c = loadConfig(writeConfig(dir, std::string(kConfig) + "track_dropout_permille: 20\ntrack_dropout_seed: 3\n", kCamera));
+  EXPECT_EQ(c.tracker.track_dropout_permille, 20);
+  EXPECT_EQ(c.tracker.track_dropout_seed, 3);
+  EXPECT_EQ(loadConfig(writeConfig(dir, kConfig, kCamera)).tracker.track_dropout_permille, 0);
+  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "track_dropout_permille: 1001\n", kCamera)); },
+              "key 'track_dropout_permille': expected 0 to 1000, got 1001");
+}
+
 TEST(Config, ModeNames) {
   Mode m{};
   for (const char* name : {"baseline", "ransac", "seg", "idy", "idy-pre", "idy-ba"}) {

@@ -16,6 +16,7 @@
 
 #include "core/error.h"
 #include "eval/trajectory_metrics.h"
+#include "pipeline/front_end.h"
 #include "pipeline/modes.h"
 #include "pipeline/observers.h"
 #include "pipeline/outputs.h"
@@ -674,6 +675,66 @@ TEST(StereoSync, DropsAndCountsImagesWhosePartnerCannotComeAndImagesOutOfOrder) 
   EXPECT_EQ(sync.outOfOrder(0), 1u);
   EXPECT_EQ(sync.outOfOrder(1), 1u);
   EXPECT_THROW(sync.add(2, 400'000'000, grayOf(0)), std::invalid_argument);
+}
+
+TEST(FrontEndDropout, WithheldTracksAreAFixedShareOfTheIds) {
+  std::size_t none = 0, all = 0, some = 0, both = 0;
+  for (std::uint64_t id = 0; id < 100000; ++id) {
+    none += withheldTrack(id, 1, 0);
+    all += withheldTrack(id, 1, 1000);
+    const bool a = withheldTrack(id, 1, 20), b = withheldTrack(id, 2, 20);
+    some += a;
+    both += a && b;
+  }
+  EXPECT_EQ(none, 0u);
+  EXPECT_EQ(all, 100000u);
+  EXPECT_NEAR(static_cast<double>(some) / 100000, 0.020, 0.003);
+  EXPECT_LT(both, some / 5);  // another seed withholds other tracks (independent: 2 % of them)
+  for (std::uint64_t id : {0ull, 7ull, 123456789ull}) EXPECT_EQ(withheldTrack(id, 4, 300), withheldTrack(id, 4, 300));
+}
+
+TEST(FrontEndDropout, OnlyTheWithheldTracksLeaveTheOutput) {
+  // The tracker follows the withheld tracks (no new corner in their place): every other
+  // feature comes out exactly as without the probe, frame after frame.
+  sim::SimOptions o;
+  o.scene.scene = "city";
+  o.scene.level = sim::Level::kNone;
+  o.scene.seed = 1;
+  o.duration_s = 1.0;
+  const sim::Scene scene(o);
+  Config plain_config = scene.rig();
+  plain_config.mode = Mode::kBaseline;
+  Config probe_config = plain_config;
+  probe_config.tracker.track_dropout_permille = 200;
+  probe_config.tracker.track_dropout_seed = 5;
+  FrontEnd plain(plain_config), probe(probe_config);
+  std::size_t withheld = 0, kept = 0;
+  for (std::size_t k = 0; k < 12; ++k) {
+    const sim::SceneFrame f = scene.renderFrame(k);
+    StereoFrame frame;
+    frame.t_ns = f.t_ns;
+    frame.index = f.index;
+    frame.left = f.cam[0].image;
+    frame.right = f.cam[1].image;
+    const frontend::FeatureFrame a = plain.track(frame, {}), b = probe.track(frame, {});
+    std::vector<frontend::Feature> expected;
+    for (const auto& feature : a.features) {
+      if (withheldTrack(feature.id, 5, 200)) {
+        ++withheld;
+      } else {
+        expected.push_back(feature);
+      }
+    }
+    ASSERT_EQ(b.features.size(), expected.size()) << "frame " << k;
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+      EXPECT_EQ(b.features[i].id, expected[i].id);
+      EXPECT_EQ(b.features[i].uv, expected[i].uv);
+      EXPECT_EQ(b.features[i].uv_right, expected[i].uv_right);
+    }
+    kept += expected.size();
+  }
+  EXPECT_GT(kept, 500u);
+  EXPECT_NEAR(static_cast<double>(withheld) / static_cast<double>(withheld + kept), 0.2, 0.06);
 }
 
 }  // namespace

@@ -86,6 +86,15 @@ struct TrackerParams {
   /// (docs/method.md). 0 switches it off.
   double move_with_eliminated_px = 6.0;
 
+  // A probe, not a tuning knob: tracks withheld from the back end at random.
+  /// Per mille of the tracks the front end follows but does not hand on (pipeline::FrontEnd),
+  /// chosen by a hash of the track id and `track_dropout_seed`: the same tracks in every frame,
+  /// still followed, so no new corner takes their place. Runs with several seeds show how far a
+  /// sequence's error moves when a few tracks go, the spread a change must beat to count
+  /// (docs/results.md). 0 = off.
+  int track_dropout_permille = 0;
+  int track_dropout_seed = 0;  ///< which tracks track_dropout_permille withholds
+
   // Set by the mode (pipeline/modes.h), not config keys.
   /// Keep following features the filter eliminated: they are reported in
   /// FeatureFrame::removed every frame and never output as features again, but they keep
@@ -133,6 +142,11 @@ struct TrackerParams {
     v.param({"corner_margin_px", "px, no corner detected nearer the border", ParamRule::kNonNegative},
             corner_margin_px);
     v.param({"patch_min_inside", "share of a first patch in the image", ParamRule::kFraction}, patch_min_inside);
+    v.section("Feature tracker: tracks withheld at random (a probe of a sequence's spread)");
+    v.param({"track_dropout_permille", "per mille of the tracks withheld from the back end, 0 = off",
+             ParamRule::kNonNegative},
+            track_dropout_permille);
+    v.param({"track_dropout_seed", "which tracks are withheld", ParamRule::kNonNegative}, track_dropout_seed);
     v.section("Feature tracker: corners moving with eliminated tracks (IDY modes)");
     v.param({"move_with_eliminated_px", "px, displacement agreement with an eliminated track, 0 = off",
              ParamRule::kNonNegative},

@@ -367,6 +367,10 @@ void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
   if (c.idy.lambda_dy_c > c.idy.lambda_dy)
     throw InputError(f.path, "lambda_dy_c (" + std::to_string(c.idy.lambda_dy_c) + ") must not exceed lambda_dy (" +
                                  std::to_string(c.idy.lambda_dy) + ")");
+  if (c.tracker.track_dropout_permille > 1000)
+    throw InputError(f.path, lineOf(f.root["track_dropout_permille"]),
+                     "key 'track_dropout_permille': expected 0 to 1000, got " +
+                         std::to_string(c.tracker.track_dropout_permille));
   if (c.estimator.estimate_anchor_ray && c.estimator.estimate_td)
     throw InputError(f.path, lineOf(f.root["estimate_anchor_ray"]),
                      "estimate_anchor_ray has no time-offset form: set estimate_td 0 with it");

@@ -3,6 +3,7 @@
 // with the mode's tracker settings and rejection filter (none, F-RANSAC, ground-truth
 // masks, or the IDY filter). `idyvins track` and pipeline::System share it.
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 
@@ -18,6 +19,10 @@ bool usesIdyFilter(Mode mode);
 
 /// The rejection filter of config.mode: null for baseline.
 std::unique_ptr<frontend::FeatureFilter> makeFilter(const Config& config);
+
+/// Whether the track `id` is withheld from the back end (TrackerParams::track_dropout_permille):
+/// a hash of id and seed below permille of 1000. Pure; the same answer in every frame.
+bool withheldTrack(std::uint64_t id, int seed, int permille);
 
 /// Tracker + filter of one mode; one instance per sequence.
 class FrontEnd {
@@ -37,6 +42,7 @@ class FrontEnd {
   frontend::FeatureTracker tracker_;
   std::unique_ptr<frontend::FeatureFilter> filter_;
   const dynamic::IdyFilter* idy_ = nullptr;  ///< filter_ when it is the IDY filter
+  int dropout_permille_ = 0, dropout_seed_ = 0;  ///< TrackerParams::track_dropout_*
 };
 
 }  // namespace idyvins::pipeline

@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# How far a sequence's ATE moves when a few of its tracks go: each static sequence (no traffic)
+# of simulated sets run as is and once per seed with `track_dropout_permille` of its tracks
+# withheld from the back end (a different few per seed; docs/cli.md). A difference between two
+# systems or two settings inside this spread is not one a single run can show.
+# Usage: bench/dropout_spread.sh IDYVINS OUT LABEL=DATA_DIR [LABEL=DATA_DIR ...]
+#   DATA_DIR: a folder of simulated sequences (bench --data); its *_none_s* are used
+#   environment: SEEDS (default "1 2 3 4 5 6"), PERMILLE (default 20), MODES (default
+#   "baseline"), JOBS (default 2: runs at the same time, one core each)
+# Prints a markdown table of ATE RMSE (SE3, `idyvins run`, all estimated poses): as is, and the
+# median, minimum and maximum over the seeds. Finished runs (a stats.json, not partial) are not redone.
+set -euo pipefail
+if [ $# -lt 3 ]; then
+  sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//' >&2
+  exit 2
+fi
+IDY=$1; OUT=$2; shift 2
+SEEDS=${SEEDS:-1 2 3 4 5 6}
+PERMILLE=${PERMILLE:-20}
+MODES=${MODES:-baseline}
+JOBS=${JOBS:-2}
+mkdir -p "$OUT"
+
+# One run: LABEL SEQ MODE SEED (seed 0: as is).
+run_one() {
+  local label=$1 seq=$2 mode=$3 seed=$4 name dir cfg
+  name=$(basename "$seq")
+  dir=$OUT/$label/${name}_${mode}_s$seed
+  # done unless missing or partial (a run stopped by a signal writes a partial stats.json)
+  [ -f "$dir/stats.json" ] && ! grep -q '"partial": *true' "$dir/stats.json" && return 0
+  rm -rf "$dir"
+  mkdir -p "$dir.config"
+  cp "$seq"/config/*.yaml "$dir.config/"
+  cfg=$dir.config/sim_stereo_imu_config.yaml
+  sed -i -e '/^track_dropout_/d' "$cfg"
+  [ "$seed" = 0 ] || printf 'track_dropout_permille: %s\ntrack_dropout_seed: %s\n' "$PERMILLE" "$seed" >> "$cfg"
+  "$IDY" run -c "$cfg" -d "$seq" -o "$dir" --mode "$mode" --threads 1 > "$dir.log" 2>&1 ||
+    echo "idyvins $mode failed on $seq (seed $seed): $dir.log" >&2
+}
+export -f run_one
+export OUT IDY PERMILLE
+
+seqs=()
+for spec in "$@"; do
+  label=${spec%%=*}; data=${spec#*=}
+  for seq in "$data"/*_none_s*; do
+    [ -f "$seq/meta.json" ] && seqs+=("$label $seq")
+  done
+done
+[ ${#seqs[@]} -gt 0 ] || { echo "no static sequences (*_none_s*/meta.json) in: $*" >&2; exit 1; }
+for item in "${seqs[@]}"; do
+  for mode in $MODES; do
+    for seed in 0 $SEEDS; do echo "$item $mode $seed"; done
+  done
+done | xargs -P "$JOBS" -L 1 bash -c 'run_one "$0" "$1" "$2" "$3"'
+
+echo "| images | sequence | mode | ATE as is (m) | ${PERMILLE} ‰ of tracks withheld: median (m) | min–max (m) | seeds |"
+echo "| --- | --- | --- | --- | --- | --- | --- |"
+for item in "${seqs[@]}"; do
+  label=${item%% *}; seq=${item#* }; name=$(basename "$seq")
+  for mode in $MODES; do
+    /usr/bin/python3 - "$OUT/$label" "$name" "$mode" "$label" $SEEDS <<'EOF'
+import json, statistics, sys
+root, name, mode, label, seeds = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5:]
+def ate(seed):
+    try:
+        summary = json.load(open(f'{root}/{name}_{mode}_s{seed}/stats.json'))['summary']
+        return None if summary.get('partial') else summary['ate_rmse_m']
+    except (OSError, KeyError, ValueError):
+        return None
+base = ate(0)
+runs = [a for a in (ate(s) for s in seeds) if a is not None]
+cells = [f'{base:.4f}' if base is not None else 'x']
+cells += [f'{statistics.median(runs):.4f}', f'{min(runs):.4f}–{max(runs):.4f}'] if runs else ['x', 'x']
+print(f'| {label} | {name} | {mode} | ' + ' | '.join(cells) + f' | {len(runs)} of {len(seeds)} |')
+EOF
+  done
+done
