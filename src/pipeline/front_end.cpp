@@ -18,10 +18,12 @@ std::unique_ptr<frontend::FeatureFilter> makeFilter(const Config& c) {
 }
 
 FrontEnd::FrontEnd(const Config& config)
-    : mode_(config.mode), tracker_(config.rig(), optionsFor(config).tracker), filter_(makeFilter(config)) {
+    : mode_(config.mode),
+      tracker_(config.rig(), optionsFor(config).tracker),
+      filter_(makeFilter(config)),
+      dropout_permille_(config.tracker.track_dropout_permille),  // config keys; no mode sets them
+      dropout_seed_(config.tracker.track_dropout_seed) {
   idy_ = dynamic_cast<const dynamic::IdyFilter*>(filter_.get());
-  dropout_permille_ = optionsFor(config).tracker.track_dropout_permille;
-  dropout_seed_ = optionsFor(config).tracker.track_dropout_seed;
 }
 
 bool withheldTrack(std::uint64_t id, int seed, int permille) {
