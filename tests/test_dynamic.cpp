@@ -11,6 +11,7 @@
 namespace idyvins::dynamic {
 namespace {
 
+using Eigen::Matrix2d;
 using Eigen::Matrix3d;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
@@ -341,6 +342,64 @@ TEST(StereoMotionTest, StaticPointsGiveZeroAndNoiseGivesFourDof) {
   EXPECT_GT(sum / n, 1.5);
   EXPECT_LT(sum / n, 4.5);
   EXPECT_LT(above, n / 200);  // χ²₄ 99.9 % quantile: well under 0.5 % above
+}
+
+TEST(StereoMotionTest, ShapedNoiseGivesFourDofAndAnEdgeSlidingAlongItselfPasses) {
+  // Matches on a horizontal edge (a roofline against the sky): KLT and the stereo match
+  // slide along u. Noise drawn with covariance σ² S, S = diag(25, 1), stays χ²₄ under the
+  // shaped test, while the isotropic test takes it for motion far more often.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double sigma_px = 0.25;
+  Matrix2d shape = Matrix2d::Zero();
+  shape.diagonal() << 25.0, 1.0;
+  std::normal_distribution<double> nu(0.0, 5.0 * sigma_px / kF), nv(0.0, sigma_px / kF);
+  const auto T_r_l = rightFromLeft();
+  double sum = 0;
+  int n = 0, above_shaped = 0, above_isotropic = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Motion m = randomMotion(rng);
+    const Vector3d p_prev(3 * u(rng), 2 * u(rng), 3 + 6 * (u(rng) + 1));
+    const StereoPair a = observe(p_prev, T_r_l), b = observe(m.R.transpose() * (p_prev - m.t), T_r_l);
+    // With the identity the shaped test is the isotropic one.
+    const auto same = stereoMotionError(a.l, a.r, b.l, b.r, T_r_l, m.R, m.t, 0.0, kF, sigma_px, Matrix2d::Identity());
+    const auto plain = stereoMotionError(a.l, a.r, b.l, b.r, T_r_l, m.R, m.t, 0.0, kF, sigma_px);
+    ASSERT_EQ(same.chi2, plain.chi2);
+    auto nz = [&](const Vector2d& x) { return Vector2d(x + Vector2d(nu(rng), nv(rng))); };
+    const Vector2d al = nz(a.l), ar = nz(a.r), bl = nz(b.l), br = nz(b.r);
+    const auto e = stereoMotionError(al, ar, bl, br, T_r_l, m.R, m.t, 0.0, kF, sigma_px, shape);
+    const auto iso = stereoMotionError(al, ar, bl, br, T_r_l, m.R, m.t, 0.0, kF, sigma_px);
+    if (!e.valid || !iso.valid) continue;
+    sum += e.chi2;
+    above_shaped += e.chi2 > 18.47;
+    above_isotropic += iso.chi2 > 18.47;
+    ++n;
+  }
+  ASSERT_GT(n, 1800);
+  EXPECT_GT(sum / n, 1.5);
+  EXPECT_LT(sum / n, 4.5);
+  EXPECT_LT(above_shaped, n / 200);
+  EXPECT_GT(above_isotropic, 20 * std::max(above_shaped, 1));
+}
+
+TEST(StereoMotionTest, AShapeAcrossTheMotionDoesNotHideTheCar) {
+  // The camera moves forward; a point 8 m ahead, 2 m to the side, rises by 0.1 m (4.75 px
+  // along v in both images) on a horizontal edge (the shape stretched along u): the motion
+  // is across the edge, so the shaped test fails it about as clearly as the isotropic one.
+  const auto T_r_l = rightFromLeft();
+  const Matrix3d R = Matrix3d::Identity();
+  const Vector3d t(0, 0, 0.5);
+  const Vector3d p_prev(2.0, 0.0, 8.0);
+  const StereoPair a = observe(p_prev, T_r_l),
+                   moved = observe(R.transpose() * (p_prev + Vector3d(0, 0.1, 0) - t), T_r_l);
+  Matrix2d horizontal = Matrix2d::Zero();
+  horizontal.diagonal() << 100.0, 1.0;
+  const double sigma_p2 = 1e-4;
+  const auto shaped = stereoMotionError(a.l, a.r, moved.l, moved.r, T_r_l, R, t, sigma_p2, kF, 0.25, horizontal);
+  const auto isotropic = stereoMotionError(a.l, a.r, moved.l, moved.r, T_r_l, R, t, sigma_p2, kF, 0.25);
+  ASSERT_TRUE(shaped.valid);
+  EXPECT_GT(shaped.chi2, 18.47);
+  EXPECT_GT(shaped.chi2, 0.5 * isotropic.chi2);
 }
 
 TEST(StereoMotionTest, SeesMotionAlongTheEpipolarLineThatDsCannot) {

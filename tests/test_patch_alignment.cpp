@@ -159,5 +159,42 @@ TEST(PatchZncc, OneForTheSameSurfaceUnderGainAndShiftLowForAnotherAndMinusOneOff
   EXPECT_EQ(patchZncc(image, {100, 100}, flat, {100, 100}, 7), -1.0);
 }
 
+TEST(MatchShape, IdentityOnACornerStretchedAlongAnEdgeAndIdentityOffTheImage) {
+  // A checkerboard corner: textured alike in u and v.
+  cv::Mat checker(60, 60, CV_8UC1, cv::Scalar(40));
+  checker(cv::Rect(30, 0, 30, 30)).setTo(200);
+  checker(cv::Rect(0, 30, 30, 30)).setTo(200);
+  cv::GaussianBlur(checker, checker, cv::Size(0, 0), 1.0);
+  const Eigen::Matrix2d corner = matchShape(checker, {29.5, 29.5}, 7, 100.0);
+  EXPECT_NEAR(corner(0, 0), 1.0, 0.05);
+  EXPECT_NEAR(corner(1, 1), 1.0, 0.05);
+  EXPECT_NEAR(corner(0, 1), 0.0, 0.05);
+  // A horizontal edge (a roofline against the sky): no gradient along u, so the stretch
+  // reaches the cap along u and stays 1 across the edge.
+  cv::Mat edge(60, 60, CV_8UC1, cv::Scalar(40));
+  edge(cv::Rect(0, 30, 60, 30)).setTo(200);
+  cv::GaussianBlur(edge, edge, cv::Size(0, 0), 1.0);
+  const Eigen::Matrix2d horizontal = matchShape(edge, {30, 30}, 7, 100.0);
+  EXPECT_NEAR(horizontal(0, 0), 100.0, 1e-6);
+  EXPECT_NEAR(horizontal(1, 1), 1.0, 1e-6);
+  // The same edge turned by 45°: stretched along the diagonal (1, 1).
+  cv::Mat diagonal(60, 60, CV_8UC1);
+  for (int v = 0; v < 60; ++v)
+    for (int u = 0; u < 60; ++u) diagonal.at<uchar>(v, u) = u - v > 0 ? 200 : 40;
+  cv::GaussianBlur(diagonal, diagonal, cv::Size(0, 0), 1.0);
+  const Eigen::Matrix2d d = matchShape(diagonal, {30, 30}, 7, 100.0);
+  const Eigen::Vector2d along = Eigen::Vector2d(1, 1).normalized(), across = Eigen::Vector2d(1, -1).normalized();
+  EXPECT_GT(along.dot(d * along), 50.0);
+  EXPECT_NEAR(across.dot(d * across), 1.0, 0.05);
+  // A cap of 10 holds; the window off the image, a flat patch or a wrong type: identity.
+  EXPECT_NEAR(matchShape(edge, {30, 30}, 7, 10.0)(0, 0), 10.0, 1e-6);
+  EXPECT_TRUE(matchShape(edge, {5, 30}, 7, 100.0).isApprox(Eigen::Matrix2d::Identity()));
+  EXPECT_TRUE(matchShape(cv::Mat(60, 60, CV_8UC1, cv::Scalar(90)), {30, 30}, 7, 100.0)
+                  .isApprox(Eigen::Matrix2d::Identity()));
+  cv::Mat as_float;
+  edge.convertTo(as_float, CV_32F);
+  EXPECT_TRUE(matchShape(as_float, {30, 30}, 7, 100.0).isApprox(Eigen::Matrix2d::Identity()));
+}
+
 }  // namespace
 }  // namespace idyvins::frontend

@@ -61,7 +61,8 @@ double epipolarErrorPx2(const Vector2d& x0, const Vector2d& x1, const Matrix3d& 
 
 StereoMotionError stereoMotionError(const Vector2d& x0_l, const Vector2d& x0_r, const Vector2d& x1_l,
                                     const Vector2d& x1_r, const Eigen::Isometry3d& T_r_l, const Matrix3d& R,
-                                    const Vector3d& t, double sigma_p2, double focal, double sigma_px) {
+                                    const Vector3d& t, double sigma_p2, double focal, double sigma_px,
+                                    const Eigen::Matrix2d& shape) {
   StereoMotionError out;
   const Matrix3d R_rl = T_r_l.linear();
   const Vector3d t_rl = T_r_l.translation();
@@ -96,9 +97,12 @@ StereoMotionError stereoMotionError(const Vector2d& x0_l, const Vector2d& x0_r, 
     J_t.col(i) = (residual(rho, t + e) - residual(rho, t - e)) / (2 * h_t);
   }
   if (!ok) return out;
-  const double sigma_rho = std::sqrt(2.0) * sigma_px / (focal * baseline);
-  const Eigen::Matrix4d C = 2.0 * sigma_px * sigma_px * Eigen::Matrix4d::Identity() +
-                            sigma_rho * sigma_rho * J_rho * J_rho.transpose() + sigma_p2 * J_t * J_t.transpose();
+  const double sigma_rho = std::sqrt(2.0 * std::max(shape(0, 0), 0.0)) * sigma_px / (focal * baseline);
+  Eigen::Matrix4d measured = Eigen::Matrix4d::Zero();
+  measured.topLeftCorner<2, 2>() = shape;
+  measured.bottomRightCorner<2, 2>() = shape;
+  const Eigen::Matrix4d C = 2.0 * sigma_px * sigma_px * measured + sigma_rho * sigma_rho * J_rho * J_rho.transpose() +
+                            sigma_p2 * J_t * J_t.transpose();
   out.valid = true;
   out.chi2 = r.dot(C.ldlt().solve(r));
   const Eigen::Vector2d r_l = r.head<2>();
@@ -325,7 +329,8 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
     const double drift = o_.stereo.drift_mps * (anchor.steps - 1) * dt;
     const StereoMotionError e = stereoMotionError(anchor.xy_l, anchor.xy_r, it.feature->xy, it.feature->xy_right,
                                                   *o_.T_r_l, anchor.R, anchor.t, anchor.var_p + drift * drift, fx,
-                                                  o_.stereo.sigma_px);
+                                                  o_.stereo.sigma_px,
+                                                  o_.stereo.shape ? it.feature->match_shape : Eigen::Matrix2d::Identity());
     if (!e.valid) continue;
     it.feature->stereo_chi2 = e.chi2;
     it.feature->stereo_depth = e.depth;

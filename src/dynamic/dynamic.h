@@ -44,9 +44,11 @@ double epipolarErrorPx2(const Eigen::Vector2d& x0, const Eigen::Vector2d& x1, co
 /// to it. With a right match in both frames the depth is known up to the stereo noise:
 /// the point triangulated in frame k is moved by the prior into frame k+1 and projected
 /// into both cameras; the 4-vector of pixel residuals r is weighed by its covariance
-/// C = 2 σ_px² I + σ_ρ² J_ρ J_ρᵀ + σ_P² J_t J_tᵀ (measurement noise of the two frames;
-/// inverse depth ρ with σ_ρ = √2 σ_px / (f b); the prior's position, σ_P² = trace cov_p / 3;
-/// J_ρ, J_t by central differences). chi2 = rᵀ C⁻¹ r (χ², 4 dof, for a static point).
+/// C = 2 σ_px² diag(S, S) + σ_ρ² J_ρ J_ρᵀ + σ_P² J_t J_tᵀ (measurement noise of the two
+/// frames, shaped by S, the match's noise shape in pixels (frontend::matchShape; identity:
+/// isotropic), in both images; inverse depth ρ with σ_ρ = √2 σ_px √S_uu / (f b), the
+/// disparity's noise along the (horizontal) baseline; the prior's position, σ_P² = trace
+/// cov_p / 3; J_ρ, J_t by central differences). chi2 = rᵀ C⁻¹ r (χ², 4 dof, for a static point).
 struct StereoMotionError {
   bool valid = false;   ///< false: not triangulable in front of both cameras
   double chi2 = 0;      ///< rᵀ C⁻¹ r
@@ -61,7 +63,7 @@ StereoMotionError stereoMotionError(const Eigen::Vector2d& x0_l, const Eigen::Ve
                                     const Eigen::Vector2d& x1_l, const Eigen::Vector2d& x1_r,
                                     const Eigen::Isometry3d& T_r_l, const Eigen::Matrix3d& R_prev_cur,
                                     const Eigen::Vector3d& t_prev_cur, double sigma_p2, double focal,
-                                    double sigma_px);
+                                    double sigma_px, const Eigen::Matrix2d& shape = Eigen::Matrix2d::Identity());
 
 /// Noise scale of the stereo motion test on one frame: max(1, q / ref) with q the
 /// `quantile` of the frame's χ² values (static points dominate the low quantiles, so q

@@ -41,6 +41,10 @@ struct StereoMotionOptions {
   /// Points whose anchor disparity (f·b / depth) is below this are not judged (their stereo
   /// depth cannot tell motion from noise); 0 = judge all.
   double min_disparity_px = 0;
+  /// Each feature's match noise σ_px² S with S its Feature::match_shape (stretched along an
+  /// edge, where KLT and the stereo match slide) instead of σ_px² I; the depth's noise from
+  /// S's component along the baseline. 0 = σ_px² I for every feature.
+  bool shape = true;
 };
 
 struct IdyOptions {
@@ -105,6 +109,7 @@ struct IdyOptions {
     v.param({"stereo_motion_min_disparity_px", "px, anchor disparity below which points are not judged",
              ParamRule::kNonNegative},
             m.min_disparity_px);
+    v.param({"stereo_motion_shape", "0/1, each feature's noise shaped by its structure tensor"}, m.shape);
     v.section("IDY-VINS lost-corner test (lost_track_test)");
     v.param({"lost_stereo_sigma_px", "px, match noise behind the depth tolerance", ParamRule::kPositive},
             lost_stereo_sigma_px);

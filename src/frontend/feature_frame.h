@@ -26,6 +26,10 @@ struct Feature {
   bool hasAnyRight() const { return has_right || right_low_zncc; }  ///< a right match of either kind
   Eigen::Vector2d uv_right = Eigen::Vector2d::Zero();
   Eigen::Vector2d xy_right = Eigen::Vector2d::Zero();
+  /// Shape of the left match's noise (frontend::matchShape at uv: identity for a corner
+  /// textured alike in every direction, stretched along an edge), set with the right match;
+  /// the stereo motion test's per-feature noise (dynamic::StereoMotionOptions::shape).
+  Eigen::Matrix2d match_shape = Eigen::Matrix2d::Identity();
   Eigen::Vector2d velocity_px = Eigen::Vector2d::Zero();  ///< left pixel velocity, px/s
   /// Velocity on the normalized image plane (1/s), left and right, from the previous frame's
   /// observation of the same track (zero for a new track or without a right match, of

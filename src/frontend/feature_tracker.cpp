@@ -17,6 +17,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 Eigen::Vector2d toEigen(const cv::Point2f& p) { return {p.x, p.y}; }
+/// Feature::match_shape's stretch along an edge at most (10× the noise of the textured
+/// direction): beyond it the position along the edge is not measured at all.
+constexpr double kMaxMatchShapeRatio = 100.0;
 
 }  // namespace
 
@@ -318,6 +321,7 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
     Feature& feat = features[(*which)[i]];
     feat.has_right = false;
     feat.right_low_zncc = false;
+    feat.match_shape = matchShape(left_pyr[0], feat.uv, params_.patch_half, kMaxMatchShapeRatio);
     bool ok = status[i] != 0;
     if (ok && params_.flow_back) ok = status_back[i] && cv::norm(back[i] - pl[i]) <= params_.flow_back_px;
     if (ok && params_.stereo_refine) {

@@ -1,6 +1,7 @@
 #include "frontend/patch_alignment.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
@@ -357,6 +358,32 @@ AlignResult alignAffine(const PatchTemplate& tmpl, const cv::Mat& image, AffineW
   }
   res.iterations = options.max_iterations;
   return res;
+}
+
+Eigen::Matrix2d matchShape(const cv::Mat& image, const Eigen::Vector2d& uv, int half, double max_ratio) {
+  const Eigen::Matrix2d identity = Eigen::Matrix2d::Identity();
+  const int u0 = static_cast<int>(std::lround(uv.x())), v0 = static_cast<int>(std::lround(uv.y()));
+  if (image.empty() || image.type() != CV_8UC1 || u0 - half < 1 || v0 - half < 1 || u0 + half > image.cols - 2 ||
+      v0 + half > image.rows - 2)
+    return identity;
+  Eigen::Matrix2d H = Eigen::Matrix2d::Zero();
+  for (int v = v0 - half; v <= v0 + half; ++v) {
+    const uchar* row = image.ptr<uchar>(v);
+    const uchar* up = image.ptr<uchar>(v - 1);
+    const uchar* down = image.ptr<uchar>(v + 1);
+    for (int u = u0 - half; u <= u0 + half; ++u) {
+      const double gu = 0.5 * (row[u + 1] - row[u - 1]), gv = 0.5 * (down[u] - up[u]);
+      H(0, 0) += gu * gu;
+      H(0, 1) += gu * gv;
+      H(1, 1) += gv * gv;
+    }
+  }
+  H(1, 0) = H(0, 1);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(H);
+  const double l_max = eig.eigenvalues()[1];
+  if (!(l_max > 1e-9)) return identity;
+  const Eigen::Vector2d ratio(std::clamp(l_max / std::max(eig.eigenvalues()[0], 1e-12), 1.0, max_ratio), 1.0);
+  return eig.eigenvectors() * ratio.asDiagonal() * eig.eigenvectors().transpose();
 }
 
 }  // namespace idyvins::frontend

@@ -79,4 +79,13 @@ AlignResult alignAffine(const PatchTemplate& tmpl, const cv::Mat& image, AffineW
 double patchZncc(const cv::Mat& a, const Eigen::Vector2d& uv_a, const cv::Mat& b, const Eigen::Vector2d& uv_b,
                  int half, double min_inside = 1.0);
 
+/// Shape of a point match's noise at `uv` (px) in a CV_8UC1 image: λ_max H⁻¹ with H the
+/// structure tensor (summed outer products of the central-difference gradients) over the
+/// (2 half + 1)² pixels around the rounded pixel, its eigenvalues clamped to [1, max_ratio].
+/// A corner textured alike in every direction gives the identity; an edge-like one is
+/// stretched along its edge by λ_max / λ_min, the direction its position is not measured
+/// in (the Cramér-Rao bound of a translation's estimate, Shi & Tomasi 1994, up to the
+/// intensity noise). Identity when the window leaves the image or has no texture.
+Eigen::Matrix2d matchShape(const cv::Mat& image, const Eigen::Vector2d& uv, int half, double max_ratio);
+
 }  // namespace idyvins::frontend
