@@ -319,8 +319,7 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
   const double f = cams_[1]->focal();
   for (std::size_t i = 0; i < n; ++i) {
     Feature& feat = features[(*which)[i]];
-    feat.has_right = false;
-    feat.right_low_zncc = false;
+    feat.has_right = feat.right_low_zncc = false;
     feat.match_shape = matchShape(left_pyr[0], feat.uv, params_.patch_half, kMaxMatchShapeRatio);
     bool ok = status[i] != 0;
     if (ok && params_.flow_back) ok = status_back[i] && cv::norm(back[i] - pl[i]) <= params_.flow_back_px;
