@@ -27,7 +27,8 @@ struct Feature {
   Eigen::Vector2d uv_right = Eigen::Vector2d::Zero();
   Eigen::Vector2d xy_right = Eigen::Vector2d::Zero();
   /// Shape of the left match's noise (frontend::matchShape at uv: identity for a corner
-  /// textured alike in every direction, stretched along an edge), set with the right match;
+  /// textured alike in every direction, stretched along an edge), set with a right match
+  /// (identity without one);
   /// the stereo motion test's per-feature noise (dynamic::StereoMotionOptions::shape).
   Eigen::Matrix2d match_shape = Eigen::Matrix2d::Identity();
   Eigen::Vector2d velocity_px = Eigen::Vector2d::Zero();  ///< left pixel velocity, px/s

@@ -320,7 +320,6 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
   for (std::size_t i = 0; i < n; ++i) {
     Feature& feat = features[(*which)[i]];
     feat.has_right = feat.right_low_zncc = false;
-    feat.match_shape = matchShape(left_pyr[0], feat.uv, params_.patch_half, kMaxMatchShapeRatio);
     bool ok = status[i] != 0;
     if (ok && params_.flow_back) ok = status_back[i] && cv::norm(back[i] - pl[i]) <= params_.flow_back_px;
     if (ok && params_.stereo_refine) {
@@ -347,6 +346,7 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
     feat.right_low_zncc = !correlates;
     feat.uv_right = toEigen(pr[i]);
     feat.xy_right = xy_r;
+    feat.match_shape = matchShape(left_pyr[0], feat.uv, params_.patch_half, kMaxMatchShapeRatio);
   }
 }
 
