@@ -192,10 +192,12 @@ TEST(Cli, RunIdyWritesOutputsAndObservationDump) {
     text.replace(at, 21, "stereo_motion_test: 0");
     idyvins::test::writeFile(cfg, text);
   }
+  // The dump named inside the output folder lands there (the folder is staged, then swapped in).
   const Result off = run("run --config " + cfg + " --dataset " + (dir / "ds") + " --out " + (dir / "out2") +
-                         " --mode idy --frames 30 --dump-observations " + (dir / "obs2.csv"));
+                         " --mode idy --frames 30 --dump-observations " + (dir / "out2/obs2.csv"));
   ASSERT_EQ(off.code, 0) << off.out;
-  const std::string csv2 = idyvins::test::readFile(dir / "obs2.csv");
+  EXPECT_TRUE(std::filesystem::exists(dir / "out2/trajectory.tum"));
+  const std::string csv2 = idyvins::test::readFile(dir / "out2/obs2.csv");
   std::size_t with_chi2 = 0;
   for (std::size_t p = csv2.find('\n'); p != std::string::npos && p + 1 < csv2.size(); p = csv2.find('\n', p + 1)) {
     // the 9th column (stereo_chi2) of each row
@@ -204,6 +206,13 @@ TEST(Cli, RunIdyWritesOutputsAndObservationDump) {
     with_chi2 += csv2.compare(q, 3, "-1,") != 0;
   }
   EXPECT_EQ(with_chi2, 0u);
+  // A dump that cannot be written fails at once, with the path, before any frame is run.
+  const Result bad = run("run --config " + cfg + " --dataset " + (dir / "ds") + " --out " + (dir / "out3") +
+                         " --mode idy --frames 30 --dump-observations /proc/idyvins_obs.csv");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.out.find("/proc/idyvins_obs.csv"), std::string::npos) << bad.out;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))  // no output folder, staged or not
+    EXPECT_EQ(e.path().filename().string().rfind("out3", 0), std::string::npos) << e.path();
 }
 
 /// Busy-loops `n` child processes until destroyed: a neighbour that takes the CPU.

@@ -72,6 +72,23 @@ class StagedFolder {
       throw InputError(staging_, "cannot create output folder: " + (ec ? ec.message() : "exists"));
   }
   const std::string& path() const { return staging_; }
+  /// Where to write an extra output file named on the command line (`--dump-observations`):
+  /// inside the output folder it goes into the staging folder (published with it); elsewhere
+  /// its folder is created and the file opened once, so a path that cannot be written fails
+  /// before the run, not after it.
+  std::string extraFile(const std::string& path) const {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::path p(path);
+    if (p.filename().empty()) throw InputError(path, "expected a file name, got a folder");
+    if (fs::weakly_canonical(fs::absolute(p).parent_path(), ec) == fs::weakly_canonical(fs::absolute(final_), ec))
+      return (fs::path(staging_) / p.filename()).string();
+    if (p.has_parent_path()) fs::create_directories(p.parent_path(), ec);
+    const bool existed = fs::exists(p, ec);
+    if (!std::ofstream(path, std::ios::app)) throw InputError(path, "cannot write file");
+    if (!existed) fs::remove(p, ec);
+    return path;
+  }
   /// Replaces the old folder (if any) by the staging folder.
   void publish() {
     namespace fs = std::filesystem;
@@ -82,10 +99,18 @@ class StagedFolder {
     if (!ec) fs::rename(staging_, final_, ec);
     if (ec) throw InputError(final_, "cannot move the finished results into place: " + ec.message());
     if (had_old) fs::remove_all(old, ec);
+    published_ = true;
+  }
+  StagedFolder(const StagedFolder&) = delete;
+  StagedFolder& operator=(const StagedFolder&) = delete;
+  ~StagedFolder() {  // a run that failed leaves no half-written staging folder behind
+    std::error_code ec;
+    if (!published_) std::filesystem::remove_all(staging_, ec);
   }
 
  private:
   std::string final_, staging_;
+  bool published_ = false;
 };
 
 /// Feeds the source to the system in time order until it ends, max_frames or a stop
@@ -269,7 +294,8 @@ int runRun(const RunArgs& a) {
   Input in = openInput(a.dataset, config, a.groundtruth_topic);
   StagedFolder folder(a.out);  // OUT.partial-PID until complete, then swapped for OUT
   const std::size_t total = a.max_frames ? std::min(a.max_frames, in.source->frameCount()) : in.source->frameCount();
-  pipeline::ObservationRecorder observations(in.has_masks, /*keep_observations=*/!a.dump_observations.empty());
+  const std::string dump = a.dump_observations.empty() ? "" : folder.extraFile(a.dump_observations);
+  pipeline::ObservationRecorder observations(in.has_masks, /*keep_observations=*/!dump.empty());
   StatsFile stats(folder.path());
   ProgressObserver progress(system.mode(), total);
   if (in.has_masks || !a.dump_observations.empty()) system.addObserver(observations);
@@ -294,7 +320,7 @@ int runRun(const RunArgs& a) {
   summary["partial"] = sig != 0;  // stopped by a signal: the frames before it only
   if (sig != 0) summary["stopped_by"] = sig == SIGINT ? "SIGINT" : "SIGTERM";
   if (in.has_masks) summary["classification"] = pipeline::toJson(observations.classify(result));
-  if (!a.dump_observations.empty()) observations.writeCsv(a.dump_observations, result);
+  if (!dump.empty()) observations.writeCsv(dump, result);
   pipeline::writeResultFiles(folder.path(), result);
   if (in.has_masks) {  // the static map's points on moving objects, for the report's ghost layer
     std::vector<io::LabelledPoint> ghosts;
