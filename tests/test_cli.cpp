@@ -213,6 +213,17 @@ TEST(Cli, RunIdyWritesOutputsAndObservationDump) {
   EXPECT_NE(bad.out.find("/proc/idyvins_obs.csv"), std::string::npos) << bad.out;
   for (const auto& e : std::filesystem::directory_iterator(dir.path()))  // no output folder, staged or not
     EXPECT_EQ(e.path().filename().string().rfind("out3", 0), std::string::npos) << e.path();
+  // --save-map inside the output folder lands there; a map folder that cannot be written fails at once.
+  const Result map_in = run("run --config " + cfg + " --dataset " + (dir / "ds") + " --out " + (dir / "out4") +
+                            " --frames 30 --save-map " + (dir / "out4/map"));
+  ASSERT_EQ(map_in.code, 0) << map_in.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out4/map/map.json"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "out4/trajectory.tum"));
+  const Result map_bad = run("run --config " + cfg + " --dataset " + (dir / "ds") + " --out " + (dir / "out5") +
+                             " --frames 30 --save-map /proc/idyvins_map");
+  EXPECT_NE(map_bad.code, 0);
+  EXPECT_NE(map_bad.out.find("/proc/idyvins_map"), std::string::npos) << map_bad.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out5"));
 }
 
 /// Busy-loops `n` child processes until destroyed: a neighbour that takes the CPU.

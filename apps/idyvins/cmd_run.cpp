@@ -81,13 +81,27 @@ class StagedFolder {
     std::error_code ec;
     const fs::path p(path);
     if (p.filename().empty()) throw InputError(path, "expected a file name, got a folder");
-    if (fs::weakly_canonical(fs::absolute(p).parent_path(), ec) == fs::weakly_canonical(fs::absolute(final_), ec))
-      return (fs::path(staging_) / p.filename()).string();
+    if (insideOutput(p)) return (fs::path(staging_) / p.filename()).string();
     if (p.has_parent_path()) fs::create_directories(p.parent_path(), ec);
     const bool existed = fs::exists(p, ec);
     if (!std::ofstream(path, std::ios::app)) throw InputError(path, "cannot write file");
     if (!existed) fs::remove(p, ec);
     return path;
+  }
+  /// The same for an extra output folder (`--save-map`): created now and a file written in it.
+  std::string extraFolder(const std::string& path) const {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    fs::path p(path);
+    if (p.filename().empty()) p = p.parent_path();  // "map/" -> "map"
+    if (fs::weakly_canonical(fs::absolute(p), ec) == fs::weakly_canonical(fs::absolute(final_), ec))
+      throw InputError(path, "is the output folder (-o); name a folder beside it or inside it");
+    if (insideOutput(p)) return (fs::path(staging_) / p.filename()).string();
+    fs::create_directories(p, ec);
+    const fs::path probe = p / (".idyvins-write-check-" + std::to_string(::getpid()));
+    if (!std::ofstream(probe)) throw InputError(path, "cannot write into this folder");
+    fs::remove(probe, ec);
+    return p.string();
   }
   /// Replaces the old folder (if any) by the staging folder.
   void publish() {
@@ -109,6 +123,11 @@ class StagedFolder {
   }
 
  private:
+  bool insideOutput(const std::filesystem::path& p) const {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    return fs::weakly_canonical(fs::absolute(p).parent_path(), ec) == fs::weakly_canonical(fs::absolute(final_), ec);
+  }
   std::string final_, staging_;
   bool published_ = false;
 };
@@ -295,6 +314,7 @@ int runRun(const RunArgs& a) {
   StagedFolder folder(a.out);  // OUT.partial-PID until complete, then swapped for OUT
   const std::size_t total = a.max_frames ? std::min(a.max_frames, in.source->frameCount()) : in.source->frameCount();
   const std::string dump = a.dump_observations.empty() ? "" : folder.extraFile(a.dump_observations);
+  const std::string map_dir = a.save_map.empty() ? "" : folder.extraFolder(a.save_map);
   pipeline::ObservationRecorder observations(in.has_masks, /*keep_observations=*/!dump.empty());
   StatsFile stats(folder.path());
   ProgressObserver progress(system.mode(), total);
@@ -327,10 +347,10 @@ int runRun(const RunArgs& a) {
     for (const auto& p : observations.staticMapOnMoving(result)) ghosts.push_back({p.p_w, 0});
     io::writePly(folder.path() + "/map_static_on_moving.ply", ghosts);
   }
-  if (!a.save_map.empty()) {
+  if (!map_dir.empty()) {
     map::SavedMap saved = system.loopCloser()->savedMap();
     saved.rig = pipeline::rigFingerprint(config);
-    map::saveMap(a.save_map, saved);
+    map::saveMap(map_dir, saved);
   }
   pipeline::addAte(summary, in.groundtruth, result);
   writeRunRecord(folder.path(), a, config, in.groundtruth, result);
