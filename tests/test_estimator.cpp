@@ -138,6 +138,38 @@ TEST(Estimator, EstimatedAnchorRaysSolveAndMarginalizeOnTheShortCitySequence) {
   EXPECT_GT(r.keyframes, 10);
 }
 
+TEST(Estimator, LandmarkShareKeepsTheRelinkedObservationsOutOfThePriorTwice) {
+  // prior_landmark_share: a landmark that lives on after its anchor keyframe leaves brings
+  // 1/m of its information into the prior. The prior ends up holding less information, the
+  // run stays as accurate (docs/method.md, The estimator).
+  const auto priorInformation = [](const Estimator& e, double& out) {
+    ASSERT_NE(e.prior(), nullptr);
+    out = (e.prior()->J0.transpose() * e.prior()->J0).trace();
+  };
+  double info_all = 0, info_share = 0;
+  const RunResult all = runSequence(options("city", 6.0), {}, EstimatorOptions{},
+                                    [&](const Estimator& e) { priorInformation(e, info_all); });
+  EstimatorOptions o;
+  o.prior_landmark_share = true;
+  const RunResult share = runSequence(options("city", 6.0), {}, o,
+                                      [&](const Estimator& e) { priorInformation(e, info_share); });
+  std::printf("city 6 s: prior information trace %.3g (all) vs %.3g (share); ATE %.4f vs %.4f m\n", info_all,
+              info_share, all.ate, share.ate);
+  EXPECT_EQ(share.resets, 0);
+  EXPECT_LT(share.ate, 0.01 * share.path);
+  EXPECT_LT(info_share, 0.7 * info_all);
+}
+
+TEST(FeatureManager, APriorShareBelowOneOnlyForLandmarksThatLiveOnReanchored) {
+  Landmark lm;
+  lm.obs.resize(1);
+  EXPECT_EQ(lm.priorShare(), 1.0);  // leaves with its keyframe (removeOldest erases it)
+  lm.obs.resize(2);
+  EXPECT_EQ(lm.priorShare(), 0.5);
+  lm.obs.resize(8);
+  EXPECT_EQ(lm.priorShare(), 0.125);
+}
+
 TEST(Estimator, InitializesDespiteAVehicleCrossingCloseInFront) {
   // A truck crosses 5-8 m ahead during the first seconds (up to ~40 % of the view).
   // Initialization itself must stay right: gravity direction and speed at the first

@@ -754,12 +754,18 @@ void Estimator::marginalizeOldest() {
              {pose0, sb0, frames_[1].pose.data(), frames_[1].sb.data()}, {0, 1}});
     auto huber = std::make_shared<ceres::HuberLoss>(options_.huber_px);
     const ProjectionWeight w{rig_.focal_px, options_.sigma_px, nullptr};
+    std::deque<double> shares;  // the projection weights point at them until marginalize()
     for (auto& [id, lm] : fm_.landmarks()) {
       if (lm.start_frame != 0 || !lm.usable()) continue;
+      std::map<int, const double*> share_of_frame;
+      if (options_.prior_landmark_share && lm.priorShare() < 1.0) {
+        shares.push_back(lm.priorShare());
+        for (int j = 0; j <= lm.endFrame(); ++j) share_of_frame[j] = &shares.back();
+      }
       // The prior keeps no information on the time offset: the marginalized observations are
       // moved to the current estimate (measured: a prior that kept it held td near its first values).
       const TdUse td = estimatesTd() ? TdUse{false, td_s_} : TdUse{};
-      for (const auto& lf : landmarkFactors(lm, rig_, w, td, {}, estimatesRays()))
+      for (const auto& lf : landmarkFactors(lm, rig_, w, td, share_of_frame, estimatesRays()))
         m.add({lf.cost, huber, factorBlocks(lm, lf.frame, false), lf.frame < 0 ? std::vector<int>{0} : std::vector<int>{0, 2}});
     }
     prior_ = std::make_shared<MarginalizationPrior>(m.marginalize());

@@ -143,6 +143,8 @@ class Estimator {
   const std::vector<MapPoint>& staticMap() const { return static_map_; }
   /// Moves the static landmarks still in the window into the static map (end of a run).
   void flushMap();
+  /// The marginalization prior (null before the first keyframe left the window).
+  const MarginalizationPrior* prior() const { return prior_.get(); }
 
  private:
   struct Frame {

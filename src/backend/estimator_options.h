@@ -37,6 +37,11 @@ struct EstimatorOptions {
   /// VINS-Fusion). Below 1 the prior fades: what frames k keyframes old contributed weighs
   /// prior_fading^k (docs/results.md: the validation family's scale error).
   double prior_fading = 1.0;
+  /// A landmark whose anchor keyframe leaves enters the prior with all its window
+  /// observations and then lives on with them in the window (VINS-Fusion's rule): a long
+  /// track's observations are counted once per re-anchoring. With this key it brings only
+  /// Landmark::priorShare() of that information (docs/method.md, The estimator).
+  bool prior_landmark_share = false;
   /// When a landmark's anchor leaves the window: keep the point that best fits all its window
   /// observations (true), or move it onto its next observation's ray at its estimated depth
   /// (false, VINS-Fusion). FeatureManager::removeOldest; docs/results.md for both families.
@@ -95,6 +100,8 @@ struct EstimatorOptions {
             clear_after_observations);
     v.param({"prior_fading", "fraction of the prior's information kept per keyframe (1: all)", ParamRule::kFraction},
             prior_fading);
+    v.param({"prior_landmark_share", "0/1, a re-anchored landmark brings 1/m of its information into the prior (1) or all of it (0)"},
+            prior_landmark_share);
     v.param({"reanchor_triangulate", "0/1, a re-anchored landmark keeps its multi-view point (1) or takes its next ray (0)"},
             reanchor_triangulate);
     v.param({"estimate_anchor_ray", "0/1, landmarks estimate their anchor ray (3 parameters; needs estimate_td 0)"},
