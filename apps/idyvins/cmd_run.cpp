@@ -94,8 +94,7 @@ class StagedFolder {
     std::error_code ec;
     fs::path p(path);
     if (p.filename().empty()) p = p.parent_path();  // "map/" -> "map"
-    if (fs::weakly_canonical(fs::absolute(p), ec) == fs::weakly_canonical(fs::absolute(final_), ec))
-      throw InputError(path, "is the output folder (-o); name a folder beside it or inside it");
+    if (isOutput(p)) throw InputError(path, "is the output folder (-o); name a folder beside it or inside it");
     if (insideOutput(p)) return (fs::path(staging_) / p.filename()).string();
     fs::create_directories(p, ec);
     const fs::path probe = p / (".idyvins-write-check-" + std::to_string(::getpid()));
@@ -123,11 +122,12 @@ class StagedFolder {
   }
 
  private:
-  bool insideOutput(const std::filesystem::path& p) const {
+  bool isOutput(const std::filesystem::path& p) const {
     namespace fs = std::filesystem;
     std::error_code ec;
-    return fs::weakly_canonical(fs::absolute(p).parent_path(), ec) == fs::weakly_canonical(fs::absolute(final_), ec);
+    return fs::weakly_canonical(fs::absolute(p), ec) == fs::weakly_canonical(fs::absolute(final_), ec);
   }
+  bool insideOutput(const std::filesystem::path& p) const { return isOutput(std::filesystem::absolute(p).parent_path()); }
   std::string final_, staging_;
   bool published_ = false;
 };
@@ -318,7 +318,7 @@ int runRun(const RunArgs& a) {
   pipeline::ObservationRecorder observations(in.has_masks, /*keep_observations=*/!dump.empty());
   StatsFile stats(folder.path());
   ProgressObserver progress(system.mode(), total);
-  if (in.has_masks || !a.dump_observations.empty()) system.addObserver(observations);
+  if (in.has_masks || !dump.empty()) system.addObserver(observations);
   system.addObserver(stats.recorder);
   system.addObserver(progress);
   std::signal(SIGINT, onStopSignal);  // stop feeding, finish, write a result marked partial

@@ -183,7 +183,7 @@ void FeatureManager::removeOldest(const std::vector<Isometry3d>& T_w_b, const Ri
       ++it;
       continue;
     }
-    if (lm.obs.size() < 2) {
+    if (!lm.livesOnReanchored()) {
       it = landmarks_.erase(it);
       continue;
     }

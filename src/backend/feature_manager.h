@@ -45,11 +45,14 @@ struct Landmark {
   Eigen::Vector3d anchorPoint() const { return Eigen::Vector3d(anchorRay().x(), anchorRay().y(), 1.0) / inv_depth; }
   int endFrame() const { return start_frame + static_cast<int>(obs.size()) - 1; }
   bool usable() const { return inv_depth > 0 && (obs.size() >= 2 || obs.front().has_right); }
+  /// Whether, anchored in the leaving keyframe, it lives on re-anchored in the next frame
+  /// (FeatureManager::removeOldest erases the others).
+  bool livesOnReanchored() const { return obs.size() >= 2; }
   /// The share of its information a landmark anchored in the leaving keyframe brings into
   /// the marginalization prior under EstimatorOptions::prior_landmark_share: 1/m when it lives
-  /// on re-anchored (m ≥ 2 window observations, FeatureManager::removeOldest), since the window
-  /// goes on using m − 1 of them; all of it when it leaves with the keyframe.
-  double priorShare() const { return obs.size() >= 2 ? 1.0 / static_cast<double>(obs.size()) : 1.0; }
+  /// on re-anchored (m window observations), since the window goes on using m − 1 of them;
+  /// all of it when it leaves with the keyframe.
+  double priorShare() const { return livesOnReanchored() ? 1.0 / static_cast<double>(obs.size()) : 1.0; }
 };
 
 /// Stereo rig extrinsics and the intrinsic scale used to weight residuals.
