@@ -21,13 +21,13 @@ render() {  # NAME ARGS...: one sequence, unless rendered
   [ -f "$out/meta.json" ] && return 0
   rm -rf "$out"
   "$B" simulate "$@" --out "$out" > /dev/null
-  sed 's/^loop_closure: 0/loop_closure: 1/' "$out/config/sim_stereo_imu_config.yaml" > "$out/config/loop.yaml"
+  { sed '/^loop_closure:/d' "$out/config/sim_stereo_imu_config.yaml"; echo "loop_closure: 1"; } > "$out/config/loop.yaml"
 }
 run() {  # SEQ MODE OUT [ARGS...]: one run, unless done
   local seq=$1 mode=$2 out=$3; shift 3
   [ -f "$out/stats.json" ] && return 0
   [ -f "$D/$seq/config/loop.yaml" ] ||
-    sed 's/^loop_closure: 0/loop_closure: 1/' "$D/$seq/config/sim_stereo_imu_config.yaml" > "$D/$seq/config/loop.yaml"
+    { sed '/^loop_closure:/d' "$D/$seq/config/sim_stereo_imu_config.yaml"; echo "loop_closure: 1"; } > "$D/$seq/config/loop.yaml"
   "$B" run -c "$D/$seq/config/loop.yaml" -d "$D/$seq" -o "$out" --mode "$mode" "$@" > "$out.log" 2>&1
 }
 seqs=()

@@ -23,7 +23,7 @@ for fam in $FAMILIES; do
     [ -f "$d/meta.json" ] || "$IDY" simulate --scene city --level none --seed 1 --duration "$DURATION" \
       --family "$fam" --td-ms "$td" -o "$d" > "$OUT/data/${fam}_td$td.log"
     for est in 0 1; do
-      sed "s/^estimate_td:.*/estimate_td: $est/" "$d/config/sim_stereo_imu_config.yaml" > "$d/config/estimate_td_$est.yaml"
+      { sed '/^estimate_td:/d' "$d/config/sim_stereo_imu_config.yaml"; echo "estimate_td: $est"; } > "$d/config/estimate_td_$est.yaml"
     done
   done
 done

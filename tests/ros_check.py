@@ -137,7 +137,8 @@ class TimingCounter:
 def loop_config(cfg):
     """The config with loop_closure: 1, beside it."""
     path = os.path.join(os.path.dirname(cfg), "loop.yaml")
-    open(path, "w").write(open(cfg).read().replace("loop_closure: 0", "loop_closure: 1"))
+    text = "".join(line for line in open(cfg) if not line.startswith("loop_closure:"))
+    open(path, "w").write(text + "loop_closure: 1\n")
     return path
 
 

@@ -167,6 +167,24 @@ TEST(Config, EveryKeyLoadReadsIsPrintedAndSaved) {
   }
 }
 
+TEST(Config, SavingOnlyChangedKeysLeavesDefaultsToTheCode) {
+  // The simulator writes its configs this way, so that a default changed later reaches a
+  // dataset rendered before (one home per parameter): the required keys and the changed ones.
+  test::TempDir dir;
+  Config c = loadConfig(configPath("sim/sim_stereo_imu_config.yaml"));
+  c.tracker.stereo_refine = !frontend::TrackerParams{}.stereo_refine;
+  saveConfig(c, dir / "changed.yaml", SavedKeys::kChanged);
+  const std::string file = test::readFile(dir / "changed.yaml");
+  EXPECT_NE(file.find("\nstereo_refine: "), std::string::npos);
+  EXPECT_NE(file.find("\nacc_w: "), std::string::npos);             // required with an IMU
+  EXPECT_NE(file.find("\nmax_num_iterations: "), std::string::npos);  // required (VINS-Fusion's)
+  EXPECT_EQ(file.find("\nprojection_sigma_px: "), std::string::npos);
+  EXPECT_EQ(file.find("\nprior_landmark_share: "), std::string::npos);
+  expectSameParameters(c, loadConfig(dir / "changed.yaml"));
+  saveConfig(c, dir / "all.yaml");
+  EXPECT_NE(test::readFile(dir / "all.yaml").find("\nprojection_sigma_px: "), std::string::npos);
+}
+
 TEST(Config, DocsListEveryKeyWithItsDefault) {
   // docs/cli.md carries keyTable() verbatim: every key, its default and unit, as the code
   // declares them. On a difference the table to paste is written beside the test binary.

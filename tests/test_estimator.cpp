@@ -147,7 +147,9 @@ TEST(Estimator, LandmarkShareKeepsTheRelinkedObservationsOutOfThePriorTwice) {
     out = (e.prior()->J0.transpose() * e.prior()->J0).trace();
   };
   double info_all = 0, info_share = 0;
-  const RunResult all = runSequence(options("city", 6.0), {}, EstimatorOptions{},
+  EstimatorOptions vins;
+  vins.prior_landmark_share = false;
+  const RunResult all = runSequence(options("city", 6.0), {}, vins,
                                     [&](const Estimator& e) { priorInformation(e, info_all); });
   EstimatorOptions o;
   o.prior_landmark_share = true;

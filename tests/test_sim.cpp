@@ -376,8 +376,12 @@ TEST(SimConfig, RealismConfigsRefineRightMatchesAndRaiseTheRemovalBarCleanOnesLe
   EXPECT_EQ(real_read.idy.stereo.persistent_strikes, 3);
   std::ifstream in(dir / "clean/c.yaml");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("stereo_refine: 0\n"), std::string::npos) << "clean configs keep the defaults";
-  EXPECT_NE(text.find("stereo_motion_remove_chi2: 0\n"), std::string::npos) << "clean configs keep the defaults";
+  EXPECT_EQ(text.find("stereo_refine:"), std::string::npos) << "clean configs leave the defaults to the code";
+  std::ifstream in_real(dir / "real/c.yaml");
+  const std::string real_text((std::istreambuf_iterator<char>(in_real)), std::istreambuf_iterator<char>());
+  EXPECT_NE(real_text.find("\nstereo_refine: 1\n"), std::string::npos);
+  EXPECT_EQ(text.find("stereo_motion_remove_chi2:"), std::string::npos);
+  EXPECT_NE(real_text.find("\nstereo_motion_remove_chi2: 80\n"), std::string::npos);
 }
 
 TEST(SimDepth, DepthImagesHoldTheRenderersDepthAndLeaveTheImagesAlone) {

@@ -1,6 +1,7 @@
 #include "backend/estimator.h"
 
 #include <ceres/ceres.h>
+#include <ceres/normal_prior.h>
 
 #include <chrono>
 #include <deque>
@@ -161,6 +162,7 @@ void Estimator::resetWindow() {
   initialized_ = false;
   fm_.clear();
   prior_.reset();
+  bias_anchor_.reset();
   for (auto& f : frames_) f.pre.reset();
 }
 
@@ -437,8 +439,13 @@ bool Estimator::alignAndStart() {
     s.q_w_b = (R0 * s.q_w_b).normalized();
     s.v_w = R0 * a.v_w[i];
     s.bg = bg;
-    s.ba.setZero();
+    // After a failure the segment starts from the accelerometer bias of the last good state.
+    s.ba = reanchor_pending_ && last_good_ ? last_good_->ba : Vector3d::Zero();
     frames_[i].setNav(s);
+  }
+  if (reanchor_pending_ && last_good_ && (options_.reset_bias_prior_acc > 0 || options_.reset_bias_prior_gyr > 0)) {
+    bias_anchor_.emplace();
+    *bias_anchor_ << last_good_->ba, last_good_->bg;
   }
   initialized_ = true;
   return true;
@@ -526,6 +533,7 @@ int Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_p
     else
       ++skipped;
   }
+  addBiasAnchor(problem, costs);
   for (int i = 1; i <= count_; ++i) {
     if (frames_[i].pre->sumDt() > 10.0) continue;
     costs.push_back(std::make_shared<ImuFactor>(frames_[i].pre.get()));
@@ -537,6 +545,19 @@ int Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_p
       ++skipped;
   }
   return skipped;
+}
+
+void Estimator::addBiasAnchor(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
+  if (prior_) bias_anchor_.reset();  // the window has its own prior now
+  if (!bias_anchor_) return;
+  // Rows for the biases of the oldest frame's [v, ba, bg] block; a zero sigma leaves that bias free.
+  Eigen::Matrix<double, 6, 9> A = Eigen::Matrix<double, 6, 9>::Zero();
+  if (options_.reset_bias_prior_acc > 0) A.block<3, 3>(0, 3).diagonal().setConstant(1.0 / options_.reset_bias_prior_acc);
+  if (options_.reset_bias_prior_gyr > 0) A.block<3, 3>(3, 6).diagonal().setConstant(1.0 / options_.reset_bias_prior_gyr);
+  Eigen::Matrix<double, 9, 1> b;
+  b << Vector3d::Zero(), *bias_anchor_;
+  costs.push_back(std::make_shared<ceres::NormalPrior>(A, b));
+  problem.AddResidualBlock(costs.back().get(), nullptr, frames_[0].sb.data());
 }
 
 std::vector<double*> Estimator::factorBlocks(Landmark& lm, int frame, bool with_td) {

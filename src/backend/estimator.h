@@ -176,6 +176,9 @@ class Estimator {
   void optimize(FrameResult& result);
   /// Returns the number of blocks left out (not finite at their start values).
   int addStateAndImu(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
+  /// The bias prior of the first window after a failure (bias_anchor_), while there is no
+  /// marginalization prior.
+  void addBiasAnchor(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
   /// Projection factors of the usable landmarks (candidates weighted); returns how many.
   int addProjections(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
                      ceres::LossFunction& huber, std::deque<CandidateWeight>& weights, int& candidates);
@@ -236,6 +239,9 @@ class Estimator {
   std::optional<LeavingKeyframe> leaving_;  ///< set by marginalizeOldest, moved into the frame's result
   TimeNs last_good_t_ns_ = 0;
   bool reanchor_pending_ = false;
+  /// The last good state's biases (ba, bg), tying the first window after a failure until its
+  /// first marginalization prior (EstimatorOptions::reset_bias_prior_acc, _gyr).
+  std::optional<Eigen::Matrix<double, 6, 1>> bias_anchor_;
 };
 
 }  // namespace idyvins::backend

@@ -432,31 +432,53 @@ void writeFile(const std::string& path, const std::string& text) {
   if (!out) throw InputError(path, "cannot write file");
 }
 
-/// "key: value" lines of every declared key under "# section" lines; strings quoted.
+/// "key: value" lines of every declared key under "# section" lines; strings quoted. Given
+/// the defaults' values (`skip`), a key that is not required and has its default value is left
+/// out, and so is a section left empty.
 class KeyPrinter final : public ParamVisitor {
  public:
-  explicit KeyPrinter(std::string indent) : indent_(std::move(indent)) {}
-  void section(const char* title) override { text += "\n" + indent_ + "# " + title + "\n"; }
+  explicit KeyPrinter(std::string indent, const std::map<std::string, std::string>* skip = nullptr)
+      : indent_(std::move(indent)), skip_(skip) {}
+  void section(const char* title) override { pending_section_ = "\n" + indent_ + "# " + title + "\n"; }
   void param(const ParamKey& k, double& v) override { add(k, number(v)); }
   void param(const ParamKey& k, int& v) override { add(k, std::to_string(v)); }
   void param(const ParamKey& k, bool& v) override { add(k, v ? "1" : "0"); }
   void param(const ParamKey& k, std::string& v) override { add(k, "\"" + v + "\""); }
   std::string text;
+  std::map<std::string, std::string> values;  ///< key -> its text, every key visited
 
  private:
   void add(const ParamKey& k, const std::string& value) {
-    text += indent_ + k.name + ": " + value + "\n";
+    values[k.name] = value;
+    if (skip_ && !k.required) {
+      const auto it = skip_->find(k.name);
+      if (it != skip_->end() && it->second == value) return;
+    }
+    text += pending_section_ + indent_ + k.name + ": " + value + "\n";
+    pending_section_.clear();
   }
   std::string indent_;
+  const std::map<std::string, std::string>* skip_;
+  std::string pending_section_;
 };
 
-/// Every declared key of `c` as KeyPrinter lines.
-std::string keyLines(const Config& c, const std::string& indent) {
+/// Every declared key of `c` as KeyPrinter lines (with `skip`: only the ones that differ).
+std::string keyLines(const Config& c, const std::string& indent,
+                     const std::map<std::string, std::string>* skip = nullptr) {
   Config copy = c;  // visitors take references; printing changes nothing
   std::string mode_name = toString(c.mode);
-  KeyPrinter printer(indent);
+  KeyPrinter printer(indent, skip);
   declareAll(printer, copy, mode_name);
   return printer.text;
+}
+
+/// Every key's text at its default value.
+std::map<std::string, std::string> defaultValues() {
+  Config c;
+  std::string mode_name = toString(c.mode);
+  KeyPrinter printer("");
+  declareAll(printer, c, mode_name);
+  return printer.values;
 }
 
 /// Markdown tables of every key: default and unit, one table per section.
@@ -539,7 +561,7 @@ void saveCameraFile(const camera::CameraParams& k, const std::string& path) {
   writeFile(path, s);
 }
 
-void saveConfig(const Config& c, const std::string& path) {
+void saveConfig(const Config& c, const std::string& path, SavedKeys keys) {
   const fs::path folder = fs::path(path).parent_path();
   std::string s = "%YAML:1.0\n# idyvins config (VINS-Fusion format)\n";
   s += "imu: " + std::to_string(c.use_imu ? 1 : 0) + "\nnum_of_cam: " + std::to_string(c.num_cam) + "\n";
@@ -553,7 +575,11 @@ void saveConfig(const Config& c, const std::string& path) {
   s += "image_width: " + std::to_string(c.image_width) + "\nimage_height: " + std::to_string(c.image_height) + "\n";
   s += "# VINS-Fusion's key, for its readers: idyvins keeps the extrinsics fixed\nestimate_extrinsic: 0\n";
   for (int i = 0; i < c.num_cam; ++i) s += "body_T_cam" + std::to_string(i) + ":" + matrixYaml(c.T_b_c.at(i).matrix());
-  s += keyLines(c, "");
+  const std::map<std::string, std::string> defaults =
+      keys == SavedKeys::kChanged ? defaultValues() : std::map<std::string, std::string>{};
+  if (keys == SavedKeys::kChanged)
+    s += "# Keys not written here have their defaults (docs/cli.md, Config keys)\n";
+  s += keyLines(c, "", keys == SavedKeys::kChanged ? &defaults : nullptr);
   writeFile(path, s);
 }
 

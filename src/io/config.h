@@ -83,11 +83,18 @@ void declareParams(ParamVisitor& visitor, Config& config);
 /// meaning. docs/cli.md holds it (tested).
 std::string keyTable();
 
-/// Writes `config` as a VINS-Fusion config at `path` with every key loadConfig reads, and
-/// its camera files next to it (camX_calib names: the file names of config.cam_paths, or
-/// cam<i>.yaml); numbers are written so that loadConfig gives them back exactly. Throws
-/// InputError when a file cannot be written.
-void saveConfig(const Config& config, const std::string& path);
+/// Which keys saveConfig writes beside the rig's.
+enum class SavedKeys {
+  kAll,      ///< every key loadConfig reads
+  kChanged,  ///< the required ones and those whose value differs from the default
+};
+
+/// Writes `config` as a VINS-Fusion config at `path` (with kChanged, a key left out has its
+/// default, so a later change of a default reaches the config), and its camera files next to
+/// it (camX_calib names: the file names of config.cam_paths, or cam<i>.yaml); numbers are
+/// written so that loadConfig gives them back exactly. Throws InputError when a file cannot
+/// be written.
+void saveConfig(const Config& config, const std::string& path, SavedKeys keys = SavedKeys::kAll);
 
 /// Writes a camodocal camera file (PINHOLE or KANNALA_BRANDT) loadCameraFile reads back exactly.
 void saveCameraFile(const camera::CameraParams& camera, const std::string& path);

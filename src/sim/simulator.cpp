@@ -285,7 +285,7 @@ void writeVinsConfig(const Config& c, const std::string& folder, const std::stri
   for (auto& cam : w.cams)
     for (double* v : {&cam.fx, &cam.fy, &cam.cx, &cam.cy, &cam.dist[0], &cam.dist[1], &cam.dist[2], &cam.dist[3]})
       *v = significant(*v, 10);
-  saveConfig(w, (dir / name).string());
+  saveConfig(w, (dir / name).string(), SavedKeys::kChanged);
 }
 
 Scene::Scene(const SimOptions& o)
