@@ -100,6 +100,17 @@ std::vector<std::string> parseModes(const std::string& text) {
 
 const std::vector<std::string> kScenes = {"city", "parking_lot"}, kLevels = {"none", "low", "mid", "high"};
 
+/// A render's config from before the simulator wrote only changed keys pins every key at the
+/// defaults of its day: said once per sequence, on stderr (the run uses it as it is).
+void warnIfConfigPinsEveryKey(const fs::path& config) {
+  std::ifstream in(config);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in.is_open() || text.find("\n# Keys not written here have their defaults") != std::string::npos) return;
+  std::fprintf(stderr, "warning: %s sets every key (rendered before 2026-11-28): it keeps that day's defaults; "
+                       "render it again, or delete the lines of the keys whose default should apply\n",
+               config.string().c_str());
+}
+
 /// The suite's datasets (name, folder), simulated where missing (each simulation uses both cores).
 std::vector<std::pair<std::string, std::string>> simulateMissing(const BenchArgs& a, const std::string& exe,
                                                                  const fs::path& data, const fs::path& runs) {
@@ -127,6 +138,7 @@ std::vector<std::pair<std::string, std::string>> simulateMissing(const BenchArgs
           if (had_family != family)
             throw InputError(ds.string(), "simulated with --family " + had_family + ", the " + a.suite +
                                               " suite needs --family " + family + ": use another --data folder");
+          warnIfConfigPinsEveryKey(ds / "config" / "sim_stereo_imu_config.yaml");
           continue;
         }
         std::printf("simulating %s\n", name.c_str());
