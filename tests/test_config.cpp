@@ -183,6 +183,8 @@ TEST(Config, SavingOnlyChangedKeysLeavesDefaultsToTheCode) {
   expectSameParameters(c, loadConfig(dir / "changed.yaml"));
   saveConfig(c, dir / "all.yaml");
   EXPECT_NE(test::readFile(dir / "all.yaml").find("\nprojection_sigma_px: "), std::string::npos);
+  EXPECT_TRUE(savedWithChangedKeysOnly(dir / "changed.yaml"));
+  EXPECT_FALSE(savedWithChangedKeysOnly(dir / "all.yaml"));
 }
 
 TEST(Config, DocsListEveryKeyWithItsDefault) {

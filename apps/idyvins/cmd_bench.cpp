@@ -103,9 +103,7 @@ const std::vector<std::string> kScenes = {"city", "parking_lot"}, kLevels = {"no
 /// A render's config from before the simulator wrote only changed keys pins every key at the
 /// defaults of its day: said once per sequence, on stderr (the run uses it as it is).
 void warnIfConfigPinsEveryKey(const fs::path& config) {
-  std::ifstream in(config);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (!in.is_open() || text.find("\n# Keys not written here have their defaults") != std::string::npos) return;
+  if (!fs::exists(config) || savedWithChangedKeysOnly(config.string())) return;
   std::fprintf(stderr, "warning: %s sets every key (rendered before 2026-11-28): it keeps that day's defaults; "
                        "render it again, or delete the lines of the keys whose default should apply\n",
                config.string().c_str());

@@ -433,6 +433,7 @@ bool Estimator::alignAndStart() {
   const Alignment a = alignVelocityGravity(windowPoses(), pre, noise_.g_norm);
   if (!a.ok) return false;
   const Quaterniond R0 = Quaterniond::FromTwoVectors(a.g_w, Vector3d::UnitZ());
+  const bool after_failure = reanchor_pending_ && last_good_;
   for (int i = 0; i <= count_; ++i) {
     imu::NavState s = frames_[i].nav();
     s.p_w_b = R0 * s.p_w_b;
@@ -440,10 +441,10 @@ bool Estimator::alignAndStart() {
     s.v_w = R0 * a.v_w[i];
     s.bg = bg;
     // After a failure the segment starts from the accelerometer bias of the last good state.
-    s.ba = reanchor_pending_ && last_good_ ? last_good_->ba : Vector3d::Zero();
+    s.ba = after_failure ? last_good_->ba : Vector3d::Zero();
     frames_[i].setNav(s);
   }
-  if (reanchor_pending_ && last_good_ && (options_.reset_bias_prior_acc > 0 || options_.reset_bias_prior_gyr > 0)) {
+  if (after_failure && (options_.reset_bias_prior_acc > 0 || options_.reset_bias_prior_gyr > 0)) {
     bias_anchor_.emplace();
     *bias_anchor_ << last_good_->ba, last_good_->bg;
   }

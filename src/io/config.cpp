@@ -472,6 +472,9 @@ std::string keyLines(const Config& c, const std::string& indent,
   return printer.text;
 }
 
+/// The comment line of a config saved with SavedKeys::kChanged.
+constexpr const char* kChangedKeysLine = "# Keys not written here have their defaults (docs/cli.md, Config keys)";
+
 /// Every key's text at its default value.
 std::map<std::string, std::string> defaultValues() {
   Config c;
@@ -575,12 +578,20 @@ void saveConfig(const Config& c, const std::string& path, SavedKeys keys) {
   s += "image_width: " + std::to_string(c.image_width) + "\nimage_height: " + std::to_string(c.image_height) + "\n";
   s += "# VINS-Fusion's key, for its readers: idyvins keeps the extrinsics fixed\nestimate_extrinsic: 0\n";
   for (int i = 0; i < c.num_cam; ++i) s += "body_T_cam" + std::to_string(i) + ":" + matrixYaml(c.T_b_c.at(i).matrix());
-  const std::map<std::string, std::string> defaults =
-      keys == SavedKeys::kChanged ? defaultValues() : std::map<std::string, std::string>{};
-  if (keys == SavedKeys::kChanged)
-    s += "# Keys not written here have their defaults (docs/cli.md, Config keys)\n";
-  s += keyLines(c, "", keys == SavedKeys::kChanged ? &defaults : nullptr);
+  if (keys == SavedKeys::kChanged) {
+    const std::map<std::string, std::string> defaults = defaultValues();
+    s += std::string(kChangedKeysLine) + "\n" + keyLines(c, "", &defaults);
+  } else {
+    s += keyLines(c, "");
+  }
   writeFile(path, s);
+}
+
+bool savedWithChangedKeysOnly(const std::string& path) {
+  std::ifstream in(path);
+  for (std::string line; std::getline(in, line);)
+    if (line == kChangedKeysLine) return true;
+  return false;
 }
 
 }  // namespace idyvins

@@ -96,6 +96,11 @@ enum class SavedKeys {
 /// be written.
 void saveConfig(const Config& config, const std::string& path, SavedKeys keys = SavedKeys::kAll);
 
+/// Whether the config at `path` was written with SavedKeys::kChanged (its comment line says
+/// so); false for a config saved with every key, which pins the defaults of the day it was
+/// written (the simulator's configs before 2026-11-28), and for one that cannot be read.
+bool savedWithChangedKeysOnly(const std::string& path);
+
 /// Writes a camodocal camera file (PINHOLE or KANNALA_BRANDT) loadCameraFile reads back exactly.
 void saveCameraFile(const camera::CameraParams& camera, const std::string& path);
 
