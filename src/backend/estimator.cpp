@@ -163,6 +163,7 @@ void Estimator::resetWindow() {
   fm_.clear();
   prior_.reset();
   bias_anchor_.reset();
+  segment_frames_ = 0;
   for (auto& f : frames_) f.pre.reset();
 }
 
@@ -257,6 +258,7 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
   last_T_w_b_ = frames_[count_].T_w_b();
   last_good_ = r.state;
   last_good_t_ns_ = ff.t_ns;
+  last_good_settled_ = ++segment_frames_ >= kSettledFrames;
   const auto slide_start = std::chrono::steady_clock::now();
   slide(r.keyframe);
   r.left_window = std::exchange(leaving_, std::nullopt);
@@ -433,14 +435,15 @@ bool Estimator::alignAndStart() {
   const Alignment a = alignVelocityGravity(windowPoses(), pre, noise_.g_norm);
   if (!a.ok) return false;
   const Quaterniond R0 = Quaterniond::FromTwoVectors(a.g_w, Vector3d::UnitZ());
-  const bool after_failure = reanchor_pending_ && last_good_;
+  // After a failure the segment starts from the last good state's biases, if that state came
+  // after its own segment's first-window transient; else from the first start's (zero ba).
+  const bool after_failure = reanchor_pending_ && last_good_ && last_good_settled_;
   for (int i = 0; i <= count_; ++i) {
     imu::NavState s = frames_[i].nav();
     s.p_w_b = R0 * s.p_w_b;
     s.q_w_b = (R0 * s.q_w_b).normalized();
     s.v_w = R0 * a.v_w[i];
     s.bg = bg;
-    // After a failure the segment starts from the accelerometer bias of the last good state.
     s.ba = after_failure ? last_good_->ba : Vector3d::Zero();
     frames_[i].setNav(s);
   }

@@ -29,6 +29,10 @@ namespace idyvins::backend {
 constexpr int kWindowSize = 10;
 /// Below this speed (m/s) of the oldest window frame the time offset is held, not estimated.
 constexpr double kMinSpeedForTd = 0.2;
+/// A segment's biases are trusted after a failure once it has solved this many frames: two
+/// windows, past the first window's bias transient (docs/results.md, "A bias prior at the
+/// first start"); an earlier failure restarts the biases as a first start does.
+constexpr int kSettledFrames = 2 * kWindowSize;
 /// At initialization the offset is searched within ± this (s) of the config's (estimate_td).
 constexpr double kTdInitSearchS = 0.03;
 /// A rotation-aligned offset this far (s) from the current one restarts the initialization.
@@ -239,6 +243,10 @@ class Estimator {
   std::optional<LeavingKeyframe> leaving_;  ///< set by marginalizeOldest, moved into the frame's result
   TimeNs last_good_t_ns_ = 0;
   bool reanchor_pending_ = false;
+  /// Frames solved since this segment's initialization, and whether the last good state came
+  /// late enough in its segment for its biases to be trusted after a failure (kSettledFrames).
+  int segment_frames_ = 0;
+  bool last_good_settled_ = false;
   /// The last good state's biases (ba, bg), tying the first window after a failure until its
   /// first marginalization prior (EstimatorOptions::reset_bias_prior_acc, _gyr).
   std::optional<Eigen::Matrix<double, 6, 1>> bias_anchor_;

@@ -64,7 +64,9 @@ struct EstimatorOptions {
   /// After a failure the new segment's first window has no marginalization prior: its
   /// biases are tied to the last good state's with these standard deviations until the first
   /// prior forms (0: free, as VINS-Fusion). Without it a window full of traffic can push the
-  /// accelerometer bias past the failure test again (docs/faults.md).
+  /// accelerometer bias past the failure test again (docs/faults.md). Only when the last good
+  /// state's segment had solved kSettledFrames frames: biases from the first window's
+  /// transient are not tied to (the new segment starts from zero ba, as the first start).
   double reset_bias_prior_acc = 0.2;   ///< m/s^2
   double reset_bias_prior_gyr = 0.02;  ///< rad/s
 
@@ -118,10 +120,10 @@ struct EstimatorOptions {
     v.section("Faults: what the integration between two frames bridges (larger gaps reset the window)");
     v.param({"max_imu_gap", "s, largest gap between two IMU samples", ParamRule::kPositive}, max_imu_gap_s);
     v.param({"max_frame_gap", "s, largest gap between two frames", ParamRule::kPositive}, max_frame_gap_s);
-    v.param({"reset_bias_prior_acc", "m/s^2, after a failure: the accelerometer bias tied to the last good one (0: free)",
+    v.param({"reset_bias_prior_acc", "m/s^2, after a failure: the accelerometer bias tied to the last good one, if settled (0: free)",
              ParamRule::kNonNegative},
             reset_bias_prior_acc);
-    v.param({"reset_bias_prior_gyr", "rad/s, after a failure: the gyroscope bias tied to the last good one (0: free)",
+    v.param({"reset_bias_prior_gyr", "rad/s, after a failure: the gyroscope bias tied to the last good one, if settled (0: free)",
              ParamRule::kNonNegative},
             reset_bias_prior_gyr);
   }
