@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <optional>
 #include <random>
 #include <set>
 
@@ -197,6 +198,34 @@ TEST(Estimator, ResetsOnLostTrackingAndReinitializes) {
   EXPECT_GE(r.resets, 1);
   ASSERT_FALSE(r.estimate.empty());
   EXPECT_GT(r.estimate.back().t_ns, 1'700'000'004'500'000'000);  // tracking again near the end
+}
+
+TEST(Estimator, AFailureInsideTheFirstWindowsTransientRestartsTheBiasesInsteadOfTyingThem) {
+  // The last good state's biases are trusted after a failure only once its segment has solved
+  // kSettledFrames frames; a blackout right after the first initialization restarts them.
+  auto firstReanchor = [](std::size_t from, std::size_t to) {
+    std::optional<FrameResult> first;
+    int first_init = -1, frame = 0;
+    runSequence(
+        options("parking_lot", 4.0),
+        [&](std::size_t k, frontend::FeatureFrame& ff) {
+          if (k >= from && k <= to) ff.features.clear();
+        },
+        {}, {},
+        [&](const FrameResult& r) {
+          if (r.initialized && first_init < 0) first_init = frame;
+          if (!r.reanchored.empty() && !first) first = r;
+          ++frame;
+        });
+    EXPECT_GE(first_init, 0);
+    EXPECT_LT(first_init, 14) << "the early blackout must fall inside the first segment's transient";
+    return first;
+  };
+  const std::optional<FrameResult> early = firstReanchor(14, 16), late = firstReanchor(50, 52);
+  ASSERT_TRUE(early.has_value());
+  ASSERT_TRUE(late.has_value());
+  EXPECT_FALSE(early->biases_from_last_good);
+  EXPECT_TRUE(late->biases_from_last_good);
 }
 
 TEST(Estimator, PostProcessingConfirmsMovingCandidatesAndClearsStaticOnes) {

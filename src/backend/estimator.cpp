@@ -297,7 +297,10 @@ bool Estimator::initStep(FrameResult& r) {
     return false;
   }
   r.status = "initialized";
-  if (reanchor_pending_) r.reanchored = reanchor();
+  if (reanchor_pending_) {
+    r.biases_from_last_good = last_good_settled_;  // as alignAndStart decided
+    r.reanchored = reanchor();
+  }
   return true;
 }
 

@@ -117,6 +117,10 @@ struct FrameResult {
   /// max_frame_gap at constant velocity ("extrapolated"), across a longer one (a time jump, a
   /// stop) held ("held"); empty otherwise.
   std::string reanchored;
+  /// With `reanchored`: the new segment started from the last good state's biases (tied to them,
+  /// EstimatorOptions::reset_bias_prior_acc); false when that state came inside its own segment's
+  /// first kSettledFrames frames and the biases started again as at the first start.
+  bool biases_from_last_good = false;
   int skipped_blocks = 0;  ///< residual blocks left out of this solve: not finite at their start values
   /// The keyframe that left the window at this frame (initialized windows only).
   std::optional<LeavingKeyframe> left_window;
