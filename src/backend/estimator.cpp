@@ -298,7 +298,7 @@ bool Estimator::initStep(FrameResult& r) {
   }
   r.status = "initialized";
   if (reanchor_pending_) {
-    r.biases_from_last_good = last_good_settled_;  // as alignAndStart decided
+    r.biases_from_last_good = biasesFromLastGood();  // as alignAndStart decided
     r.reanchored = reanchor();
   }
   return true;
@@ -438,25 +438,25 @@ bool Estimator::alignAndStart() {
   const Alignment a = alignVelocityGravity(windowPoses(), pre, noise_.g_norm);
   if (!a.ok) return false;
   const Quaterniond R0 = Quaterniond::FromTwoVectors(a.g_w, Vector3d::UnitZ());
-  // After a failure the segment starts from the last good state's biases, if that state came
-  // after its own segment's first-window transient; else from the first start's (zero ba).
-  const bool after_failure = reanchor_pending_ && last_good_ && last_good_settled_;
+  const bool from_last_good = biasesFromLastGood();
   for (int i = 0; i <= count_; ++i) {
     imu::NavState s = frames_[i].nav();
     s.p_w_b = R0 * s.p_w_b;
     s.q_w_b = (R0 * s.q_w_b).normalized();
     s.v_w = R0 * a.v_w[i];
     s.bg = bg;
-    s.ba = after_failure ? last_good_->ba : Vector3d::Zero();
+    s.ba = from_last_good ? last_good_->ba : Vector3d::Zero();
     frames_[i].setNav(s);
   }
-  if (after_failure && (options_.reset_bias_prior_acc > 0 || options_.reset_bias_prior_gyr > 0)) {
+  if (from_last_good && (options_.reset_bias_prior_acc > 0 || options_.reset_bias_prior_gyr > 0)) {
     bias_anchor_.emplace();
     *bias_anchor_ << last_good_->ba, last_good_->bg;
   }
   initialized_ = true;
   return true;
 }
+
+bool Estimator::biasesFromLastGood() const { return reanchor_pending_ && last_good_ && last_good_settled_; }
 
 void Estimator::optimize(FrameResult& r) {
   const auto start = std::chrono::steady_clock::now();

@@ -184,6 +184,10 @@ class Estimator {
   void optimize(FrameResult& result);
   /// Returns the number of blocks left out (not finite at their start values).
   int addStateAndImu(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
+  /// Whether the segment being initialized starts from the last good state's biases (tied to
+  /// them): after a failure whose last good state came after its own segment's first-window
+  /// transient (kSettledFrames); else from the first start's (zero ba, the alignment's bg).
+  bool biasesFromLastGood() const;
   /// The bias prior of the first window after a failure (bias_anchor_), while there is no
   /// marginalization prior.
   void addBiasAnchor(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
