@@ -75,6 +75,26 @@ TEST(ImuFactor, ResidualIsZeroAtThePredictedState) {
   EXPECT_LT(pre.residual(si, sj).norm(), 1e-12);
 }
 
+TEST(BiasPriorFactor, ResidualIsTheWhitenedBiasErrorAndItsJacobianMatchesNumeric) {
+  const Vector3d ba0 = rand3(0.1), bg0 = rand3(0.01);
+  const BiasPriorFactor factor(ba0, bg0, 0.02, 0.001);
+  std::vector<double> sb(9);
+  Eigen::Map<Eigen::Matrix<double, 9, 1>> v(sb.data());
+  v << rand3(2), ba0 + Vector3d(0.04, 0, -0.02), bg0 + Vector3d(0, 0.003, 0);
+  const double* blocks[] = {sb.data()};
+  Eigen::Matrix<double, 6, 1> r;
+  ASSERT_TRUE(factor.Evaluate(blocks, r.data(), nullptr));
+  Eigen::Matrix<double, 6, 1> expected;
+  expected << 2.0, 0.0, -1.0, 0.0, 3.0, 0.0;  // (b − b0)/σ; the speed is not in it
+  EXPECT_LT((r - expected).norm(), 1e-9) << r.transpose();
+  test::checkCostFunction(factor, {sb.data()}, 1e-6, "bias prior");
+  // A zero sigma leaves that bias free: its rows are zero whatever the bias.
+  const BiasPriorFactor acc_only(ba0, bg0, 0.02, 0.0);
+  ASSERT_TRUE(acc_only.Evaluate(blocks, r.data(), nullptr));
+  EXPECT_LT(r.tail<3>().norm(), 1e-15);
+  EXPECT_NEAR(r(0), 2.0, 1e-9);
+}
+
 /// Random scene: anchor observation of a point at depth 2..20 m seen from two poses.
 struct ProjectionSetup {
   std::vector<double> pose_i, pose_j;

@@ -1,7 +1,6 @@
 #include "backend/estimator.h"
 
 #include <ceres/ceres.h>
-#include <ceres/normal_prior.h>
 
 #include <chrono>
 #include <deque>
@@ -557,13 +556,8 @@ int Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_p
 void Estimator::addBiasAnchor(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
   if (prior_) bias_anchor_.reset();  // the window has its own prior now
   if (!bias_anchor_) return;
-  // Rows for the biases of the oldest frame's [v, ba, bg] block; a zero sigma leaves that bias free.
-  Eigen::Matrix<double, 6, 9> A = Eigen::Matrix<double, 6, 9>::Zero();
-  if (options_.reset_bias_prior_acc > 0) A.block<3, 3>(0, 3).diagonal().setConstant(1.0 / options_.reset_bias_prior_acc);
-  if (options_.reset_bias_prior_gyr > 0) A.block<3, 3>(3, 6).diagonal().setConstant(1.0 / options_.reset_bias_prior_gyr);
-  Eigen::Matrix<double, 9, 1> b;
-  b << Vector3d::Zero(), *bias_anchor_;
-  costs.push_back(std::make_shared<ceres::NormalPrior>(A, b));
+  costs.push_back(std::make_shared<BiasPriorFactor>(bias_anchor_->head<3>(), bias_anchor_->tail<3>(),
+                                                    options_.reset_bias_prior_acc, options_.reset_bias_prior_gyr));
   problem.AddResidualBlock(costs.back().get(), nullptr, frames_[0].sb.data());
 }
 

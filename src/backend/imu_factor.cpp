@@ -118,4 +118,21 @@ bool ImuFactor::Evaluate(double const* const* parameters, double* residuals,
   return true;
 }
 
+BiasPriorFactor::BiasPriorFactor(const Vector3d& ba0, const Vector3d& bg0, double sigma_acc, double sigma_gyr) {
+  b0_ << ba0, bg0;
+  w_ << Vector3d::Constant(sigma_acc > 0 ? 1.0 / sigma_acc : 0.0), Vector3d::Constant(sigma_gyr > 0 ? 1.0 / sigma_gyr : 0.0);
+}
+
+bool BiasPriorFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  const Eigen::Map<const Eigen::Matrix<double, 6, 1>> b(parameters[0] + 3);
+  Eigen::Map<Eigen::Matrix<double, 6, 1>> r(residuals);
+  r = w_.cwiseProduct(b - b0_);
+  if (jacobians && jacobians[0]) {
+    Eigen::Map<Eigen::Matrix<double, 6, 9, Eigen::RowMajor>> J(jacobians[0]);
+    J.setZero();
+    J.rightCols<6>().diagonal() = w_;
+  }
+  return true;
+}
+
 }  // namespace idyvins::backend

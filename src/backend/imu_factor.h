@@ -29,6 +29,21 @@ class ImuFactor final : public ceres::SizedCostFunction<15, 7, 9, 7, 9> {
   imu::Matrix15 sqrt_info_;
 };
 
+/// A prior on the biases of one speed/bias block [v, ba, bg]: residual
+/// [(ba − ba0)/σa; (bg − bg0)/σg]; a σ ≤ 0 leaves that bias free (zero rows).
+/// Written here rather than ceres::NormalPrior, whose Eigen members are allocated inside
+/// libceres and freed in our code (a mismatch AddressSanitizer reports).
+class BiasPriorFactor final : public ceres::SizedCostFunction<6, 9> {
+ public:
+  BiasPriorFactor(const Eigen::Vector3d& ba0, const Eigen::Vector3d& bg0, double sigma_acc, double sigma_gyr);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  Eigen::Matrix<double, 6, 1> b0_;
+  Eigen::Matrix<double, 6, 1> w_;  // 1/σ per row, 0 for a free bias
+};
+
 /// Reads a NavState from a pose block and a speed/bias block.
 imu::NavState navStateFromBlocks(const double* pose, const double* speed_bias);
 
