@@ -155,32 +155,17 @@ cv::Mat toGray(const sensor_msgs::CompressedImage& m, const std::string& path, c
   return gray;
 }
 
-/// Header stamps (and the size check) of an image topic.
-std::vector<ImageRecord> indexImages(const rosbag::Bag& bag, const std::string& path, const std::string& topic,
-                                     const std::string& type, int expected_width, int expected_height) {
+/// The records of an image topic in bag order; `stamp_of(message, ordinal)` checks one message and
+/// returns its header stamp. Stamps must increase strictly.
+template <typename StampOf>
+std::vector<ImageRecord> indexImageTopic(const rosbag::Bag& bag, const std::string& path, const std::string& topic,
+                                         StampOf stamp_of) {
   std::vector<ImageRecord> records;
   rosbag::View view(bag, rosbag::TopicQuery(topic));
   TimeNs prev = 0;
   for (const rosbag::MessageInstance& m : view) {
     const std::size_t ordinal = records.size() + 1;
-    TimeNs t = 0;
-    if (type == kImage) {
-      const auto img = m.instantiate<sensor_msgs::Image>();
-      if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
-      if (channelsOf(img->encoding) == 0)
-        throw InputError(path, where(topic, ordinal) + ": unsupported image encoding '" + img->encoding +
-                                   "' (supported: mono8, rgb8, bgr8, rgba8, bgra8)");
-      checkSize(path, topic, ordinal, static_cast<int>(img->width), static_cast<int>(img->height), expected_width,
-                expected_height);
-      t = stampNs(img->header.stamp);
-    } else {
-      const auto img = m.instantiate<sensor_msgs::CompressedImage>();
-      if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
-      if (!supportedCompression(img->format))
-        throw InputError(path, where(topic, ordinal) + ": unsupported compressed format '" + img->format +
-                                   "' (supported: png, jpeg)");
-      t = stampNs(img->header.stamp);
-    }
+    const TimeNs t = stamp_of(m, ordinal);
     checkIncreasing(path, topic, ordinal, prev, t);
     prev = t;
     ImageRecord r;
@@ -193,34 +178,42 @@ std::vector<ImageRecord> indexImages(const rosbag::Bag& bag, const std::string& 
   return records;
 }
 
-/// Header stamps of the segmentation topic (strictly increasing).
-std::vector<ImageRecord> indexSegmentation(const rosbag::Bag& bag, const std::string& path, const std::string& topic,
-                                           const std::string& type) {
-  std::vector<ImageRecord> records;
-  rosbag::View view(bag, rosbag::TopicQuery(topic));
-  TimeNs prev = 0;
-  for (const rosbag::MessageInstance& m : view) {
-    const std::size_t ordinal = records.size() + 1;
-    TimeNs t = 0;
+/// Header stamps (and the encoding and size checks) of a camera's image topic.
+std::vector<ImageRecord> indexImages(const rosbag::Bag& bag, const std::string& path, const std::string& topic,
+                                     const std::string& type, int expected_width, int expected_height) {
+  return indexImageTopic(bag, path, topic, [&](const rosbag::MessageInstance& m, std::size_t ordinal) {
     if (type == kImage) {
       const auto img = m.instantiate<sensor_msgs::Image>();
       if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
-      t = stampNs(img->header.stamp);
-    } else {
-      const auto img = m.instantiate<sensor_msgs::CompressedImage>();
-      if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
-      t = stampNs(img->header.stamp);
+      if (channelsOf(img->encoding) == 0)
+        throw InputError(path, where(topic, ordinal) + ": unsupported image encoding '" + img->encoding +
+                                   "' (supported: mono8, rgb8, bgr8, rgba8, bgra8)");
+      checkSize(path, topic, ordinal, static_cast<int>(img->width), static_cast<int>(img->height), expected_width,
+                expected_height);
+      return stampNs(img->header.stamp);
     }
-    checkIncreasing(path, topic, ordinal, prev, t);
-    prev = t;
-    ImageRecord r;
-    r.t_ns = t;
-    r.path = path + ":" + topic;
-    r.csv_line = static_cast<int>(ordinal);
-    r.exists = true;
-    records.push_back(std::move(r));
-  }
-  return records;
+    const auto img = m.instantiate<sensor_msgs::CompressedImage>();
+    if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+    if (!supportedCompression(img->format))
+      throw InputError(path, where(topic, ordinal) + ": unsupported compressed format '" + img->format +
+                                 "' (supported: png, jpeg)");
+    return stampNs(img->header.stamp);
+  });
+}
+
+/// Header stamps of the segmentation topic (strictly increasing).
+std::vector<ImageRecord> indexSegmentation(const rosbag::Bag& bag, const std::string& path, const std::string& topic,
+                                           const std::string& type) {
+  return indexImageTopic(bag, path, topic, [&](const rosbag::MessageInstance& m, std::size_t ordinal) {
+    if (type == kImage) {
+      const auto img = m.instantiate<sensor_msgs::Image>();
+      if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+      return stampNs(img->header.stamp);
+    }
+    const auto img = m.instantiate<sensor_msgs::CompressedImage>();
+    if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+    return stampNs(img->header.stamp);
+  });
 }
 
 std::vector<ImuSample> indexImu(const rosbag::Bag& bag, const std::string& path, const std::string& topic) {
