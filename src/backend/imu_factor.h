@@ -31,8 +31,10 @@ class ImuFactor final : public ceres::SizedCostFunction<15, 7, 9, 7, 9> {
 
 /// A prior on the biases of one speed/bias block [v, ba, bg]: residual
 /// [(ba − ba0)/σa; (bg − bg0)/σg]; a σ ≤ 0 leaves that bias free (zero rows).
-/// Written here rather than ceres::NormalPrior, whose Eigen members are allocated inside
-/// libceres and freed in our code (a mismatch AddressSanitizer reports).
+/// Written here rather than ceres::NormalPrior: libceres allocates that class's Eigen members and
+/// our code frees them, and under AddressSanitizer Eigen turns off EIGEN_GLIBC_MALLOC_ALREADY_ALIGNED
+/// (Eigen/src/Core/util/Memory.h), so an ASan build frees with Eigen's own aligned free what
+/// libceres allocated with plain malloc (a heap-buffer-overflow report; release builds match).
 class BiasPriorFactor final : public ceres::SizedCostFunction<6, 9> {
  public:
   BiasPriorFactor(const Eigen::Vector3d& ba0, const Eigen::Vector3d& bg0, double sigma_acc, double sigma_gyr);
