@@ -106,6 +106,15 @@ std::string where(const std::string& topic, std::size_t ordinal) {
   return "topic '" + topic + "' message " + std::to_string(ordinal);
 }
 
+/// The message as `Msg` (of the topic's declared `type`); InputError when it does not read as one.
+template <typename Msg>
+boost::shared_ptr<Msg> messageAs(const rosbag::MessageInstance& m, const std::string& type, const std::string& path,
+                                 const std::string& topic, std::size_t ordinal) {
+  auto msg = m.instantiate<Msg>();
+  if (!msg) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+  return msg;
+}
+
 void checkSize(const std::string& path, const std::string& topic, std::size_t ordinal, int width, int height,
                int expected_width, int expected_height) {
   if (expected_width > 0 && (width != expected_width || height != expected_height))
@@ -183,8 +192,7 @@ std::vector<ImageRecord> indexImages(const rosbag::Bag& bag, const std::string& 
                                      const std::string& type, int expected_width, int expected_height) {
   return indexImageTopic(bag, path, topic, [&](const rosbag::MessageInstance& m, std::size_t ordinal) {
     if (type == kImage) {
-      const auto img = m.instantiate<sensor_msgs::Image>();
-      if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+      const auto img = messageAs<sensor_msgs::Image>(m, type, path, topic, ordinal);
       if (channelsOf(img->encoding) == 0)
         throw InputError(path, where(topic, ordinal) + ": unsupported image encoding '" + img->encoding +
                                    "' (supported: mono8, rgb8, bgr8, rgba8, bgra8)");
@@ -192,8 +200,7 @@ std::vector<ImageRecord> indexImages(const rosbag::Bag& bag, const std::string& 
                 expected_height);
       return stampNs(img->header.stamp);
     }
-    const auto img = m.instantiate<sensor_msgs::CompressedImage>();
-    if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+    const auto img = messageAs<sensor_msgs::CompressedImage>(m, type, path, topic, ordinal);
     if (!supportedCompression(img->format))
       throw InputError(path, where(topic, ordinal) + ": unsupported compressed format '" + img->format +
                                  "' (supported: png, jpeg)");
@@ -205,14 +212,8 @@ std::vector<ImageRecord> indexImages(const rosbag::Bag& bag, const std::string& 
 std::vector<ImageRecord> indexSegmentation(const rosbag::Bag& bag, const std::string& path, const std::string& topic,
                                            const std::string& type) {
   return indexImageTopic(bag, path, topic, [&](const rosbag::MessageInstance& m, std::size_t ordinal) {
-    if (type == kImage) {
-      const auto img = m.instantiate<sensor_msgs::Image>();
-      if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
-      return stampNs(img->header.stamp);
-    }
-    const auto img = m.instantiate<sensor_msgs::CompressedImage>();
-    if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
-    return stampNs(img->header.stamp);
+    return stampNs(type == kImage ? messageAs<sensor_msgs::Image>(m, type, path, topic, ordinal)->header.stamp
+                                  : messageAs<sensor_msgs::CompressedImage>(m, type, path, topic, ordinal)->header.stamp);
   });
 }
 
@@ -291,8 +292,7 @@ cv::Mat toRgb(const rosbag::MessageInstance& m, const std::string& type, const s
               const std::string& topic, std::size_t ordinal) {
   cv::Mat rgb;
   if (type == kImage) {
-    const auto img = m.instantiate<sensor_msgs::Image>();
-    if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+    const auto img = messageAs<sensor_msgs::Image>(m, type, path, topic, ordinal);
     const int ch = channelsOf(img->encoding);
     if (ch < 3)
       throw InputError(path, where(topic, ordinal) + ": segmentation encoding '" + img->encoding +
@@ -307,8 +307,7 @@ cv::Mat toRgb(const rosbag::MessageInstance& m, const std::string& type, const s
     else if (img->encoding == "rgba8") cv::cvtColor(wrapped, rgb, cv::COLOR_RGBA2RGB);
     else cv::cvtColor(wrapped, rgb, cv::COLOR_BGRA2RGB);
   } else {
-    const auto img = m.instantiate<sensor_msgs::CompressedImage>();
-    if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+    const auto img = messageAs<sensor_msgs::CompressedImage>(m, type, path, topic, ordinal);
     const cv::Mat bgr = cv::imdecode(img->data, cv::IMREAD_COLOR);
     if (bgr.empty()) throw InputError(path, where(topic, ordinal) + ": the " + img->format + " data does not decode");
     cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
@@ -525,12 +524,10 @@ cv::Mat grayImage(const rosbag::MessageInstance& m, const std::string& type, con
                   const std::string& topic, std::size_t ordinal, int width, int height) {
   cv::Mat gray;
   if (type == kImage) {
-    const auto img = m.instantiate<sensor_msgs::Image>();
-    if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+    const auto img = messageAs<sensor_msgs::Image>(m, type, path, topic, ordinal);
     gray = toGray(*img, path, topic, ordinal);
   } else {
-    const auto img = m.instantiate<sensor_msgs::CompressedImage>();
-    if (!img) throw InputError(path, where(topic, ordinal) + ": cannot be read as " + type);
+    const auto img = messageAs<sensor_msgs::CompressedImage>(m, type, path, topic, ordinal);
     gray = toGray(*img, path, topic, ordinal);
   }
   checkSize(path, topic, ordinal, gray.cols, gray.rows, width, height);
