@@ -265,7 +265,7 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
   EXPECT_DOUBLE_EQ(c.idy.stereo.chi2, 18.47);
   EXPECT_DOUBLE_EQ(c.idy.stereo.sigma_px, 0.25);
   EXPECT_EQ(c.idy.stereo.strikes, 2);
-  EXPECT_EQ(c.idy.stereo.anchor_frames, 10);
+  EXPECT_EQ(c.idy.stereo.anchor_frames, 40);
   EXPECT_DOUBLE_EQ(c.idy.stereo.drift_mps, 0.02);
   EXPECT_DOUBLE_EQ(c.idy.stereo.remove_chi2, 0.0);
   EXPECT_EQ(c.idy.stereo.persistent_strikes, 3);

@@ -592,6 +592,74 @@ TEST(IdyFilter, LeftGateSparesStaticPointsWhoseRightMatchAloneIsOff) {
   EXPECT_EQ(bad_removed_ungated, 10);  // without the gate two bad right matches remove a static point
 }
 
+/// A truck driving along the camera's line of sight among static points, all tracked in
+/// stereo with Gaussian noise through an IdyFilter with the stereo motion test.
+struct LineOfSightScene {
+  Vector3d truck;            ///< the truck's feature in the first frame (left camera, m)
+  double truck_step = 0;     ///< m per frame, away from the camera
+  double camera_step = 0;    ///< m per frame, forward
+  double near = 0, far = 0;  ///< depth range of the 80 static points (m)
+  int frames = 0;
+};
+struct LineOfSightResult {
+  int truck_removed_at = -1;  ///< frame of the truck's removal, -1: never
+  int static_removed = 0;
+};
+
+LineOfSightResult runLineOfSight(const LineOfSightScene& scene, int anchor_frames, double noise_ref,
+                                 double noise_px) {
+  const auto cam = pinholeCamera();
+  const auto T_r_l = rightFromLeft();
+  const frontend::MotionPrior prior = forwardPrior(scene.camera_step, 1e-8);
+  IdyOptions o;
+  o.stereo.enabled = true;
+  o.T_r_l = T_r_l;
+  o.stereo.anchor_frames = anchor_frames;
+  o.stereo.noise_ref = noise_ref;
+  IdyFilter filter(o);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::normal_distribution<double> noise(0.0, noise_px / kF);
+  std::vector<Vector3d> points(81);
+  const double half = 0.5 * (scene.far - scene.near);
+  for (auto& p : points) p = Vector3d(6 * u(rng), 2 * u(rng), scene.near + half * (u(rng) + 1));
+  points[0] = scene.truck;
+  std::vector<frontend::Feature> feats(points.size());
+  std::vector<bool> gone(points.size(), false);
+  std::vector<StereoPair> prev(points.size());
+  auto nz = [&](const Vector2d& x) { return Vector2d(x + Vector2d(noise(rng), noise(rng))); };
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const StereoPair o0 = observe(points[i], T_r_l);
+    prev[i] = {nz(o0.l), nz(o0.r)};
+  }
+  LineOfSightResult out;
+  frontend::FilterContext ctx{cam.get(), &prior, nullptr, 0, 50'000'000};
+  for (int frame = 1; frame <= scene.frames; ++frame) {
+    std::vector<frontend::FilterItem> live;
+    std::vector<std::size_t> ids;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      points[i] += Vector3d(0, 0, i == 0 ? scene.truck_step : 0.0) - prior.t_prev_cur;
+      if (gone[i]) continue;
+      const StereoPair ob = observe(points[i], T_r_l);
+      frontend::FilterItem it;
+      trackedStereo(i, prev[i], StereoPair{nz(ob.l), nz(ob.r)}, feats[i], it);  // braces: left noise first
+      live.push_back(it);
+      ids.push_back(i);
+      prev[i] = {feats[i].xy, feats[i].xy_right};
+    }
+    filter.apply(ctx, live);
+    for (std::size_t k = 0; k < live.size(); ++k) {
+      if (!live[k].remove) continue;
+      gone[ids[k]] = true;
+      if (ids[k] == 0)
+        out.truck_removed_at = frame;
+      else
+        ++out.static_removed;
+    }
+  }
+  return out;
+}
+
 TEST(IdyFilter, AnchoredStereoTestSeesSlowMotionAlongTheLineOfSight) {
   // A truck 25 m ahead drives away 0.15 m per frame while the camera moves 0.1 m per
   // frame forward: per frame its image motion stays within the stereo depth noise, but
@@ -600,71 +668,36 @@ TEST(IdyFilter, AnchoredStereoTestSeesSlowMotionAlongTheLineOfSight) {
   // Gaussian noise puts the frame's 25 % χ² quantile near 1, which the default noise scale
   // would read as a noisy tracker (see StereoNoiseScale below); at the bulk noise of the
   // tracker on clean renders (0.05 px) the default scale stays 1 and the truck goes the same.
-  const auto cam = pinholeCamera();
-  const auto T_r_l = rightFromLeft();
-  const frontend::MotionPrior prior = forwardPrior(0.1, 1e-8);
-  auto runFrames = [&](int anchor_frames, double noise_ref, double noise_px, int& truck_removed_at,
-                       int& static_removed) {
-    IdyOptions o;
-    o.stereo.enabled = true;
-    o.T_r_l = T_r_l;
-    o.stereo.anchor_frames = anchor_frames;
-    o.stereo.noise_ref = noise_ref;
-    IdyFilter filter(o);
-    std::mt19937 rng(8);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    std::normal_distribution<double> noise(0.0, noise_px / kF);
-    std::vector<Vector3d> points(81);
-    for (auto& p : points) p = Vector3d(6 * u(rng), 2 * u(rng), 12 + 8 * (u(rng) + 1));
-    points[0] = Vector3d(2.5, 0.3, 25.0);  // the truck's feature
-    std::vector<frontend::Feature> feats(points.size());
-    std::vector<frontend::FilterItem> items(points.size());
-    std::vector<bool> gone(points.size(), false);
-    std::vector<StereoPair> prev(points.size());
-    auto nz = [&](const Vector2d& x) { return Vector2d(x + Vector2d(noise(rng), noise(rng))); };
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const StereoPair o0 = observe(points[i], T_r_l);
-      prev[i] = {nz(o0.l), nz(o0.r)};
-    }
-    truck_removed_at = -1;
-    static_removed = 0;
-    frontend::FilterContext ctx{cam.get(), &prior, nullptr, 0, 50'000'000};
-    for (int frame = 1; frame <= 30; ++frame) {
-      std::vector<frontend::FilterItem> live;
-      std::vector<std::size_t> ids;
-      for (std::size_t i = 0; i < points.size(); ++i) {
-        points[i] += Vector3d(0, 0, i == 0 ? 0.15 : 0.0) - prior.t_prev_cur;
-        if (gone[i]) continue;
-        const StereoPair ob = observe(points[i], T_r_l);
-        frontend::FilterItem it;
-        trackedStereo(i, prev[i], StereoPair{nz(ob.l), nz(ob.r)}, feats[i], it);  // braces: left noise first
-        live.push_back(it);
-        ids.push_back(i);
-        prev[i] = {feats[i].xy, feats[i].xy_right};
-      }
-      filter.apply(ctx, live);
-      for (std::size_t k = 0; k < live.size(); ++k) {
-        if (!live[k].remove) continue;
-        gone[ids[k]] = true;
-        if (ids[k] == 0)
-          truck_removed_at = frame;
-        else
-          ++static_removed;
-      }
-    }
-  };
-  int at1 = 0, st1 = 0, at10 = 0, st10 = 0, at_def = 0, st_def = 0;
-  runFrames(1, 0.0, 0.2, at1, st1);
-  runFrames(10, 0.0, 0.2, at10, st10);
-  runFrames(10, StereoMotionOptions{}.noise_ref, 0.05, at_def, st_def);
-  EXPECT_EQ(at1, -1);  // consecutive frames only: never removed in 30 frames
-  EXPECT_GT(at10, 2);  // anchored: removed after a few frames of accumulated motion
-  EXPECT_LE(at10, 12);
-  EXPECT_LE(st1, 1);
-  EXPECT_LE(st10, 1);
-  EXPECT_GT(at_def, 2);
-  EXPECT_LE(at_def, 12);
-  EXPECT_EQ(st_def, 0);
+  const LineOfSightScene scene{Vector3d(2.5, 0.3, 25.0), 0.15, 0.1, 12, 28, 30};
+  const LineOfSightResult one = runLineOfSight(scene, 1, 0.0, 0.2);
+  const LineOfSightResult ten = runLineOfSight(scene, 10, 0.0, 0.2);
+  const LineOfSightResult def = runLineOfSight(scene, 10, StereoMotionOptions{}.noise_ref, 0.05);
+  EXPECT_EQ(one.truck_removed_at, -1);  // consecutive frames only: never removed in 30 frames
+  EXPECT_GT(ten.truck_removed_at, 2);   // anchored: removed after a few frames of accumulated motion
+  EXPECT_LE(ten.truck_removed_at, 12);
+  EXPECT_LE(one.static_removed, 1);
+  EXPECT_LE(ten.static_removed, 1);
+  EXPECT_GT(def.truck_removed_at, 2);
+  EXPECT_LE(def.truck_removed_at, 12);
+  EXPECT_EQ(def.static_removed, 0);
+}
+
+TEST(IdyFilter, AFarTruckAlongTheLineOfSightNeedsTheLongAnchor) {
+  // A walking camera (0.07 m per frame) and a car 80 m ahead, 14 px from the focus of
+  // expansion, driving away at 8 m/s (0.4 m per frame): its disparity (0.5 px) cannot tell
+  // its depth change, and over 10 frames it moves about 0.6 px toward the focus of
+  // expansion, within what a static point at some depth inside the stereo noise does. Over
+  // the default anchor (40 frames, 2 s) it moves about 2 px and is removed; static points
+  // 40-120 m away are not, at the default noise scale and 0.05 px of tracking noise.
+  const LineOfSightScene scene{Vector3d(3.0, 0.3, 80.0), 0.4, 0.07, 40, 120, 80};
+  const double noise_ref = StereoMotionOptions{}.noise_ref;
+  const LineOfSightResult ten = runLineOfSight(scene, 10, noise_ref, 0.05);
+  const LineOfSightResult def = runLineOfSight(scene, StereoMotionOptions{}.anchor_frames, noise_ref, 0.05);
+  EXPECT_EQ(ten.truck_removed_at, -1);
+  EXPECT_GT(def.truck_removed_at, 10);  // after more motion than the 10-frame anchor spans
+  EXPECT_LE(def.truck_removed_at, 40);
+  EXPECT_EQ(ten.static_removed, 0);
+  EXPECT_EQ(def.static_removed, 0);
 }
 
 TEST(StereoNoiseScale, QuantileOverTheReferenceNeverBelowOne) {

@@ -17,7 +17,7 @@ struct StereoMotionOptions {
   double chi2 = 18.47;     ///< χ²₄ at 99.9 %
   double sigma_px = 0.25;  ///< one KLT / stereo match
   int strikes = 2;         ///< consecutive failures before removal (an earlier failure marks a candidate)
-  int anchor_frames = 10;  ///< compare with the stereo observation up to this many frames back (1 = previous)
+  int anchor_frames = 40;  ///< compare with the stereo observation up to this many frames back (1 = previous; 2 s at 20 Hz)
   double drift_mps = 0.02;  ///< drift of the chained priors
   /// With a value above `chi2`, a repeated failure removes the feature only when its χ²
   /// exceeds this or the failures reach `persistent_strikes`; otherwise it stays a
