@@ -671,15 +671,15 @@ TEST(IdyFilter, AnchoredStereoTestSeesSlowMotionAlongTheLineOfSight) {
   const LineOfSightScene scene{Vector3d(2.5, 0.3, 25.0), 0.15, 0.1, 12, 28, 30};
   const LineOfSightResult one = runLineOfSight(scene, 1, 0.0, 0.2);
   const LineOfSightResult ten = runLineOfSight(scene, 10, 0.0, 0.2);
-  const LineOfSightResult def = runLineOfSight(scene, 10, StereoMotionOptions{}.noise_ref, 0.05);
+  const LineOfSightResult scaled = runLineOfSight(scene, 10, StereoMotionOptions{}.noise_ref, 0.05);
   EXPECT_EQ(one.truck_removed_at, -1);  // consecutive frames only: never removed in 30 frames
   EXPECT_GT(ten.truck_removed_at, 2);   // anchored: removed after a few frames of accumulated motion
   EXPECT_LE(ten.truck_removed_at, 12);
   EXPECT_LE(one.static_removed, 1);
   EXPECT_LE(ten.static_removed, 1);
-  EXPECT_GT(def.truck_removed_at, 2);
-  EXPECT_LE(def.truck_removed_at, 12);
-  EXPECT_EQ(def.static_removed, 0);
+  EXPECT_GT(scaled.truck_removed_at, 2);
+  EXPECT_LE(scaled.truck_removed_at, 12);
+  EXPECT_EQ(scaled.static_removed, 0);
 }
 
 TEST(IdyFilter, AFarTruckAlongTheLineOfSightNeedsTheLongAnchor) {

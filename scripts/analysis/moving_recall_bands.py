@@ -45,8 +45,9 @@ def summarize(path):
             static_total += len(obs)
             static_once_unflagged += len(obs) == 1 and not is_flagged
             continue
-        moving[band(obs)] += on_moving
-        flagged[band(obs)] += on_moving if is_flagged else 0
+        b = band(obs)
+        moving[b] += on_moving
+        flagged[b] += on_moving if is_flagged else 0
     return moving, flagged, static_once_unflagged / max(static_total, 1)
 
 
