@@ -522,6 +522,45 @@ TEST(FeatureTracker, LowZnccRightMatchesOnlyLeaveTheMotionTests) {
   EXPECT_GT(verified, 20 * low);
 }
 
+TEST(FeatureTracker, EveryEndedTrackIsCountedOnceWithItsReason) {
+  // A truck crossing 7-9 m ahead at 20 m/s (about 1 m per frame): KLT loses its corners, the
+  // street's tracks leave the image or are pruned. Every id of frame k - 1 missing at frame k
+  // must be counted once in lost_tracks (and in lost_new when it was a new corner).
+  const sim::Scene scene =
+      crossingVehicleScene(3.0, "truck", Vector3d(8.0, 2.5, 3.0), Vector3d(9.0, -30.0, 0.0), 20.0);
+  FeatureTracker tracker(scene.rig().rig(), scene.rig().tracker);
+  TrackLosses sum_all, sum_new;
+  std::size_t ended = 0, ended_new = 0;
+  std::map<std::uint64_t, int> prev;  // id -> track length at frame k - 1
+  for (std::size_t k = 0; k < 61; ++k) {
+    const FeatureFrame out = tracker.track(stereo(scene.renderFrame(k)), MotionPrior{}, nullptr);
+    std::set<std::uint64_t> now;
+    for (const auto& f : out.features) now.insert(f.id);
+    std::size_t gone = 0, gone_new = 0;
+    for (const auto& [id, length] : prev)
+      if (!now.count(id)) {
+        ++gone;
+        gone_new += length == 1;
+      }
+    EXPECT_EQ(out.lost_tracks.total(), gone) << "frame " << k;
+    EXPECT_EQ(out.lost_new.total(), gone_new) << "frame " << k;
+    ended += gone;
+    ended_new += gone_new;
+    sum_all += out.lost_tracks;
+    sum_new += out.lost_new;
+    prev.clear();
+    for (const auto& f : out.features) prev[f.id] = f.track_length;
+  }
+  std::printf("ended: %zu tracks (%zu new corners): klt %zu, border %zu, backward %zu, alignment %zu, pruned %zu\n",
+              ended, ended_new, sum_all.klt, sum_all.border, sum_all.backward, sum_all.alignment, sum_all.pruned);
+  ASSERT_GT(ended, 100u);
+  EXPECT_GT(sum_all.klt + sum_all.backward, 0u);  // the truck's corners
+  EXPECT_GT(sum_all.alignment, 0u);
+  EXPECT_GT(sum_all.border, 0u);  // the street leaving the image
+  EXPECT_GT(sum_all.pruned, 0u);
+  EXPECT_LE(sum_new.total(), sum_all.total());
+}
+
 TEST(Rejection, SegDropsExactlyTheFeaturesOnMaskedPixels) {
   const sim::Scene scene(options("city", sim::Level::kHigh, 3.0));
   FeatureTracker tracker(scene.rig().rig(), scene.rig().tracker);

@@ -44,6 +44,24 @@ struct Feature {
   double stereo_depth = 0;  ///< depth (m) of the stereo test's anchor point, 0 if not tested
 };
 
+/// Why tracks of the previous frame ended in this one, counted per reason.
+struct TrackLosses {
+  std::size_t klt = 0;        ///< KLT did not converge
+  std::size_t border = 0;     ///< ended within border_px of the image border, or outside the camera model
+  std::size_t backward = 0;   ///< the forward-backward KLT check failed (flow_back)
+  std::size_t alignment = 0;  ///< the first-patch alignment failed (no convergence, ZNCC, correction)
+  std::size_t pruned = 0;     ///< dropped within min_dist of a longer track
+  std::size_t total() const { return klt + border + backward + alignment + pruned; }
+  TrackLosses& operator+=(const TrackLosses& o) {
+    klt += o.klt;
+    border += o.border;
+    backward += o.backward;
+    alignment += o.alignment;
+    pruned += o.pruned;
+    return *this;
+  }
+};
+
 /// The front end's output for one frame.
 struct FeatureFrame {
   TimeNs t_ns = 0;  ///< on the IMU clock: the image stamp + td_s
@@ -62,6 +80,8 @@ struct FeatureFrame {
   std::size_t tracked = 0;     ///< features carried over from the previous frame (before the filter)
   std::size_t rejected = 0;    ///< removed by the filter in this frame
   std::size_t detected = 0;    ///< new corners
+  TrackLosses lost_tracks;     ///< tracks of the previous frame (followed eliminated ones included) ended here
+  TrackLosses lost_new;        ///< of those, the previous frame's new corners (tracked for one frame)
 };
 
 /// Relative motion of the left camera predicted between the previous and the

@@ -20,6 +20,11 @@ Eigen::Vector2d toEigen(const cv::Point2f& p) { return {p.x, p.y}; }
 /// Feature::match_shape's stretch along an edge at most (10× the noise of the textured
 /// direction): beyond it the position along the edge is not measured at all.
 constexpr double kMaxMatchShapeRatio = 100.0;
+/// Counts a track of `length` frames ended for `reason` (new corners: length 1).
+void countLoss(FeatureFrame& out, int length, std::size_t TrackLosses::*reason) {
+  ++(out.lost_tracks.*reason);
+  if (length == 1) ++(out.lost_new.*reason);
+}
 
 }  // namespace
 
@@ -86,7 +91,7 @@ bool FeatureTracker::inBorder(const cv::Point2f& p) const {
 }
 
 void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Mat& image, std::vector<Track>& tracks,
-                                   std::vector<PrevObs>& prev, std::vector<const Track*>& lost) {
+                                   std::vector<PrevObs>& prev, std::vector<const Track*>& lost, FeatureFrame& out) {
   if (prev_pyr_.empty() || prev_tracks_.empty()) return;
   std::vector<cv::Point2f> p0, p1, back;
   for (const auto& t : prev_tracks_) p0.push_back(t.uv);
@@ -102,31 +107,18 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Ma
   }
   for (std::size_t i = 0; i < p0.size(); ++i) {
     const Track& old = prev_tracks_[i];
-    bool ok = status[i] && inBorder(p1[i]);
-    if (ok && params_.flow_back)
-      ok = status_back[i] && cv::norm(back[i] - p0[i]) <= params_.flow_back_px;
-    if (!ok) {
-      lost.push_back(&old);
-      continue;
-    }
-    Eigen::Matrix2d A_patch = old.A_patch;
-    if (params_.align_first_patch && old.patch) {
-      AffineWarp warp{old.A_patch, toEigen(p1[i])};
-      const AlignResult r = alignAffine(*old.patch, image, warp, alignOptions());
-      if (!r.converged || r.zncc < params_.min_patch_zncc ||
-          (warp.t - toEigen(p1[i])).norm() > params_.max_patch_correction_px) {
-        lost.push_back(&old);
-        continue;
-      }
-      p1[i] = cv::Point2f(static_cast<float>(warp.t.x()), static_cast<float>(warp.t.y()));
-      if (!inBorder(p1[i])) {
-        lost.push_back(&old);
-        continue;
-      }
-      A_patch = warp.A;
-    }
+    std::size_t TrackLosses::*reason = nullptr;
+    if (!status[i])
+      reason = &TrackLosses::klt;
+    else if (!inBorder(p1[i]))
+      reason = &TrackLosses::border;
+    else if (params_.flow_back && !(status_back[i] && cv::norm(back[i] - p0[i]) <= params_.flow_back_px))
+      reason = &TrackLosses::backward;
+    Eigen::Matrix2d A_patch;
     Eigen::Vector2d xy;
-    if (!cams_[0]->liftToNormalized(toEigen(p1[i]), xy)) {
+    if (!reason) reason = continueTrack(old, image, p1[i], A_patch, xy);
+    if (reason) {
+      countLoss(out, old.length, reason);
       lost.push_back(&old);
       continue;
     }
@@ -134,6 +126,22 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Ma
     tracks.back().flow = toEigen(p1[i]) - toEigen(old.uv);
     prev.push_back({toEigen(old.uv), old.xy, old.has_right, old.xy_right, old.uv_right});
   }
+}
+
+std::size_t TrackLosses::*FeatureTracker::continueTrack(const Track& old, const cv::Mat& image, cv::Point2f& p1,
+                                                        Eigen::Matrix2d& A_patch, Eigen::Vector2d& xy) const {
+  A_patch = old.A_patch;
+  if (params_.align_first_patch && old.patch) {
+    AffineWarp warp{old.A_patch, toEigen(p1)};
+    const AlignResult r = alignAffine(*old.patch, image, warp, alignOptions());
+    if (!r.converged || r.zncc < params_.min_patch_zncc ||
+        (warp.t - toEigen(p1)).norm() > params_.max_patch_correction_px)
+      return &TrackLosses::alignment;
+    p1 = cv::Point2f(static_cast<float>(warp.t.x()), static_cast<float>(warp.t.y()));
+    A_patch = warp.A;
+  }
+  if (!inBorder(p1) || !cams_[0]->liftToNormalized(toEigen(p1), xy)) return &TrackLosses::border;
+  return nullptr;
 }
 
 /// The tracker's measurements for the lost-corner test of one frame (LostCornerProbe).
@@ -233,7 +241,7 @@ std::vector<uchar> FeatureTracker::kltFromGuess(const std::vector<cv::Mat>& from
   return status;
 }
 
-void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected,
+void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks, FeatureFrame& out,
                                std::vector<const Track*>& with_eliminated) {
   // Keep long tracks first; drop tracks closer than min_dist to a longer one.
   std::vector<std::size_t> order(tracks.size());
@@ -249,6 +257,7 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
   for (std::size_t i : order) {
     const cv::Point pt(cvRound(tracks[i].uv.x), cvRound(tracks[i].uv.y));
     if (mask.at<uchar>(pt) != 255) {
+      countLoss(out, tracks[i].length - 1, &TrackLosses::pruned);
       if (judge_pruned && tracks[i].length == 2 && movesWithEliminated(tracks[i], kept, r)) {
         const auto old = std::find_if(prev_tracks_.begin(), prev_tracks_.end(),
                                       [&](const Track& p) { return p.id == tracks[i].id; });
@@ -268,6 +277,7 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
     mask.colRange(mask.cols - b, mask.cols).setTo(cv::Scalar(0));
   }
   const int n_max = params_.max_cnt - static_cast<int>(tracks.size());
+  std::size_t& detected = out.detected;
   detected = 0;
   if (n_max <= 0) return;
   CornerOptions corner_options;
@@ -367,7 +377,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& input, const MotionPrior& 
   std::vector<Track> tracks;
   std::vector<PrevObs> prev;
   std::vector<const Track*> lost;  // into prev_tracks_
-  trackPrevious(cur_pyr_, frame.left, tracks, prev, lost);
+  trackPrevious(cur_pyr_, frame.left, tracks, prev, lost, w.out);
   if (params_.judge_lost_new_tracks && !lost.empty()) {
     const auto t0 = Clock::now();
     judgeLost(frame.left, lost, w);
@@ -386,7 +396,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& input, const MotionPrior& 
   if (params_.keep_following_eliminated) followEliminated(w, followed, tracks);
 
   std::vector<const Track*> with_eliminated;  // into prev_tracks_
-  detectNew(frame.left, tracks, w.out.detected, with_eliminated);
+  detectNew(frame.left, tracks, w.out, with_eliminated);
   for (const Track* t : with_eliminated) {
     Feature f = featureOf(*t, FeatureLabel::kEliminated);  // its first (previous) frame, as lost_moving
     f.has_right = t->has_right;

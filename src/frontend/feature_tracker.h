@@ -86,8 +86,14 @@ class FeatureTracker {
   void setVelocities(FeatureFrame& out, double dt) const;
   /// Right matches of new corners and followed tracks; records each kept track's match.
   void matchNewAndFollowed(FeatureFrame& out, std::vector<Track>& final_tracks);
+  /// KLT of prev_tracks_ into `pyr`: the continued tracks, their previous observations, the
+  /// lost ones (into prev_tracks_), and why each was lost (out.lost_tracks, out.lost_new).
   void trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Mat& image, std::vector<Track>& tracks,
-                     std::vector<PrevObs>& prev, std::vector<const Track*>& lost);
+                     std::vector<PrevObs>& prev, std::vector<const Track*>& lost, FeatureFrame& out);
+  /// After KLT's checks passed at `p1`: the first-patch alignment, the border and the camera.
+  /// Null when the track goes on (p1, A_patch and xy set), else why it ends.
+  std::size_t TrackLosses::*continueTrack(const Track& old, const cv::Mat& image, cv::Point2f& p1,
+                                          Eigen::Matrix2d& A_patch, Eigen::Vector2d& xy) const;
   /// judge_lost_new_tracks: hands the lost one-frame tracks with a right match to the
   /// filter's judgement (with the tracker's measurements, Probe) and reports those judged
   /// moving in w.out.lost_moving.
@@ -102,7 +108,8 @@ class FeatureTracker {
   /// Prunes tracks closer than min_dist to a longer one, then detects new corners. A
   /// corner in its second frame pruned next to a followed eliminated track that moved
   /// with it is appended to `with_eliminated` (its previous-frame track, in prev_tracks_).
-  void detectNew(const cv::Mat& image, std::vector<Track>& tracks, std::size_t& detected,
+  /// Sets out.detected and counts the pruned tracks in out.lost_tracks / lost_new.
+  void detectNew(const cv::Mat& image, std::vector<Track>& tracks, FeatureFrame& out,
                  std::vector<const Track*>& with_eliminated);
   /// Matches features[i] for i in `which` (all when null) in the right image: KLT from the
   /// left position on klt_max_level + 1 levels, backward check, epipolar and ZNCC checks.

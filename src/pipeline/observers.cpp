@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/error.h"
+#include "pipeline/outputs.h"
 
 namespace idyvins::pipeline {
 namespace {
@@ -160,6 +161,8 @@ nlohmann::json StatsRecorder::frameJson(const FrameOutput& out) {
                      {"solve_iterations", r.solve.iterations},
                      {"features", ff.features.size()},
                      {"removed", ff.removed.size()},
+                     {"lost_tracks", toJson(ff.lost_tracks)},
+                     {"lost_new", toJson(ff.lost_new)},
                      {"landmarks", r.landmarks},
                      {"keyframe", r.keyframe},
                      {"initialized", r.initialized},

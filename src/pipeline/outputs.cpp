@@ -143,6 +143,10 @@ void writeResultFiles(const std::string& out, const Result& r) {
   atomically("loops.csv", [&](const std::string& p) { writeLoopsCsv(p, r.loops); });
 }
 
+nlohmann::json toJson(const frontend::TrackLosses& l) {
+  return {{"klt", l.klt}, {"border", l.border}, {"backward", l.backward}, {"alignment", l.alignment}, {"pruned", l.pruned}};
+}
+
 nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
   const Summary& s = r.summary;
   const double n = static_cast<double>(s.frames), seq_s = toSeconds(s.last_t_ns - s.first_t_ns);
@@ -173,6 +177,8 @@ nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
           {"td_estimated", s.td_estimated},
           {"lost_new_corners_tested", s.lost_tested},
           {"lost_new_corners_moving", s.lost_moving},
+          {"lost_tracks", toJson(s.lost_tracks)},
+          {"lost_new", toJson(s.lost_new)},
           {"map_static_points", r.static_map.size()},
           {"map_dynamic_points", r.dynamic_map.size()},
           {"classification", nullptr},

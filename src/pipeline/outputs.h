@@ -10,6 +10,10 @@
 
 namespace idyvins::pipeline {
 
+/// Why tracks ended (frontend::TrackLosses) as a stats.json object: klt, border, backward,
+/// alignment, pruned.
+nlohmann::json toJson(const frontend::TrackLosses& l);
+
 /// Writes into the existing `folder`: trajectory.tum (TUM), trajectory.csv (EuRoC),
 /// state.csv (pose, velocity, biases in EuRoC's ground-truth columns), map_static.ply,
 /// map_dynamic.ply and map_all.ply (labelled points), resets.csv (each reset: time, frame,

@@ -337,6 +337,8 @@ void System::account(FrameOutput& out) {
   }
   if (out.idy && !out.idy->prior_valid) ++s.frames_without_prior;
   s.sum_tracking_ms += out.features.tracking_ms;
+  s.lost_tracks += out.features.lost_tracks;
+  s.lost_new += out.features.lost_new;
   s.sum_filter_ms += out.features.filter_ms;
   s.sum_optimization_ms += r.optimization_ms;
   s.sum_marginalization_ms += r.marginalization_ms;
