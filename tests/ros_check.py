@@ -157,19 +157,25 @@ def play_into_nodes(ros, bag, cfg, work):
     check(wait_for(lambda: subscribed(inputs, "/idyvins1") and subscribed(inputs, "/idyvins2"), 60),
           "both nodes subscribed to the config's imu_topic, image0_topic, image1_topic")
     # --wait-for-subscribers waits for one subscriber per topic; -d gives the second node time to
-    # connect too after each advertise (under load a connection can take a while).
+    # connect too after each advertise (under load a connection can take a while). --keep-alive:
+    # without it rosbag play exits as soon as it has handed its last message to roscpp, and what
+    # is still queued for the sockets can go with it (the likely cause of one run under load where
+    # both nodes got 79 of the 81 frames); it is stopped here once every frame has arrived.
     timing = TimingCounter(nodes)
-    play = subprocess.run(["rosbag", "play", "-q", "--wait-for-subscribers", "-d", "2", "--topics"] + inputs +
-                          ["--", bag],
-                          env=ros.env, capture_output=True, text=True, timeout=300)
-    check(play.returncode == 0, "rosbag play: " + play.stderr.strip()[-200:])
+    play = ros.start(["rosbag", "play", "-q", "--keep-alive", "--wait-for-subscribers", "-d", "2", "--topics"] +
+                     inputs + ["--", bag], "play.log")
     # The node drains its queue when stopped, but what it publishes while ROS shuts down is less
     # sure to reach the recorder: the stop comes once every frame's timing message has arrived
     # (under load a node can be seconds behind the bag). With two threads the last frame's back
     # end waits for a next frame, so it runs at the stop.
     expected = {1: FRAMES, 2: FRAMES - 1}
-    check(wait_for(lambda: timing.reached(expected), 300),
+    wait_for(lambda: timing.reached(expected) or play.poll() is not None, 300)
+    check(timing.reached(expected),
           "timing messages before the stop: %s of %s" % (timing.counts, expected))
+    alive = play.poll() is None
+    check(alive, "rosbag play kept alive after the bag" + ("" if alive else " (exit %s: %s)" % (
+        play.returncode, open(os.path.join(work, "play.log")).read().strip()[-200:])))
+    stop(play)
     codes = {}
     for th, p in nodes.items():
         time.sleep(1.0)  # the frame's other messages follow its timing message
