@@ -9,9 +9,12 @@
 #   "baseline"), JOBS (default 2: runs at the same time, one core each)
 # Prints a markdown table of ATE RMSE (SE3, `idyvins run`, all estimated poses): as is, and the
 # median, minimum and maximum over the seeds. Finished runs (a stats.json, not partial) are not redone.
+# With two or more MODES, a second table: each further mode's ATE over the first's, seed by seed
+# (same seed, so the same track ids withheld), as is and the median, range and count at or below 1.0x
+# over the seeds.
 set -euo pipefail
 if [ $# -lt 3 ]; then
-  sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//' >&2
+  sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//' >&2
   exit 2
 fi
 IDY=$1; OUT=$2; shift 2
@@ -73,6 +76,41 @@ runs = [a for a in (ate(s) for s in seeds) if a is not None]
 cells = [f'{base:.4f}' if base is not None else 'x']
 cells += [f'{statistics.median(runs):.4f}', f'{min(runs):.4f}–{max(runs):.4f}'] if runs else ['x', 'x']
 print(f'| {label} | {name} | {mode} | ' + ' | '.join(cells) + f' | {len(runs)} of {len(seeds)} |')
+EOF
+  done
+done
+
+# Each further mode against the first, seed by seed (the same tracks withheld from both).
+read -r -a mode_list <<< "$MODES"
+[ ${#mode_list[@]} -ge 2 ] || exit 0
+first=${mode_list[0]}
+echo
+echo "| images | sequence | mode / $first | as is | withheld: median | min–max | seeds at or below 1.0× |"
+echo "| --- | --- | --- | --- | --- | --- | --- |"
+for item in "${seqs[@]}"; do
+  label=${item%% *}; seq=${item#* }; name=$(basename "$seq")
+  for mode in "${mode_list[@]:1}"; do
+    /usr/bin/python3 - "$OUT/$label" "$name" "$first" "$mode" "$label" $SEEDS <<'EOF'
+import json, statistics, sys
+root, name, first, mode, label, seeds = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[6:]
+def ate(m, seed):
+    try:
+        summary = json.load(open(f'{root}/{name}_{m}_s{seed}/stats.json'))['summary']
+        return None if summary.get('partial') else summary['ate_rmse_m']
+    except (OSError, KeyError, ValueError):
+        return None
+def ratio(seed):
+    a, b = ate(mode, seed), ate(first, seed)
+    return a / b if a is not None and b else None
+base = ratio(0)
+runs = [r for r in (ratio(s) for s in seeds) if r is not None]
+cells = [f'{base:.2f}×' if base is not None else 'x']
+if runs:
+    cells += [f'{statistics.median(runs):.2f}×', f'{min(runs):.2f}–{max(runs):.2f}×',
+              f'{sum(r <= 1.0 for r in runs)} of {len(runs)}']
+else:
+    cells += ['x', 'x', '0 of 0']
+print(f'| {label} | {name} | {mode} | ' + ' | '.join(cells) + ' |')
 EOF
   done
 done
