@@ -57,60 +57,41 @@ for item in "${seqs[@]}"; do
   done
 done | xargs -P "$JOBS" -L 1 bash -c 'run_one "$0" "$1" "$2" "$3"'
 
-echo "| images | sequence | mode | ATE as is (m) | ${PERMILLE} ‰ of tracks withheld: median (m) | min–max (m) | seeds |"
-echo "| --- | --- | --- | --- | --- | --- | --- |"
-for item in "${seqs[@]}"; do
-  label=${item%% *}; seq=${item#* }; name=$(basename "$seq")
-  for mode in $MODES; do
-    /usr/bin/python3 - "$OUT/$label" "$name" "$mode" "$label" $SEEDS <<'EOF'
-import json, statistics, sys
-root, name, mode, label, seeds = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5:]
-def ate(seed):
-    try:
-        summary = json.load(open(f'{root}/{name}_{mode}_s{seed}/stats.json'))['summary']
-        return None if summary.get('partial') else summary['ate_rmse_m']
-    except (OSError, KeyError, ValueError):
-        return None
-base = ate(0)
-runs = [a for a in (ate(s) for s in seeds) if a is not None]
-cells = [f'{base:.4f}' if base is not None else 'x']
-cells += [f'{statistics.median(runs):.4f}', f'{min(runs):.4f}–{max(runs):.4f}'] if runs else ['x', 'x']
-print(f'| {label} | {name} | {mode} | ' + ' | '.join(cells) + f' | {len(runs)} of {len(seeds)} |')
-EOF
-  done
-done
+# The tables, from the runs' stats.json: each mode's ATE, then (two or more MODES) each further
+# mode over the first, seed by seed (the same seed withholds the same track ids in both).
+/usr/bin/python3 - "$OUT" "$PERMILLE" "$MODES" "$SEEDS" "${seqs[@]}" <<'EOF'
+import json, os, statistics, sys
+out, permille, modes, seeds, items = sys.argv[1], sys.argv[2], sys.argv[3].split(), sys.argv[4].split(), sys.argv[5:]
 
-# Each further mode against the first, seed by seed (the same tracks withheld from both).
-read -r -a mode_list <<< "$MODES"
-[ ${#mode_list[@]} -ge 2 ] || exit 0
-first=${mode_list[0]}
-echo
-echo "| images | sequence | mode / $first | as is | withheld: median | min–max | seeds at or below 1.0× |"
-echo "| --- | --- | --- | --- | --- | --- | --- |"
-for item in "${seqs[@]}"; do
-  label=${item%% *}; seq=${item#* }; name=$(basename "$seq")
-  for mode in "${mode_list[@]:1}"; do
-    /usr/bin/python3 - "$OUT/$label" "$name" "$first" "$mode" "$label" $SEEDS <<'EOF'
-import json, statistics, sys
-root, name, first, mode, label, seeds = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[6:]
-def ate(m, seed):
+def ate(label, name, mode, seed):
     try:
-        summary = json.load(open(f'{root}/{name}_{m}_s{seed}/stats.json'))['summary']
+        summary = json.load(open(f'{out}/{label}/{name}_{mode}_s{seed}/stats.json'))['summary']
         return None if summary.get('partial') else summary['ate_rmse_m']
     except (OSError, KeyError, ValueError):
         return None
-def ratio(seed):
-    a, b = ate(mode, seed), ate(first, seed)
+
+def row(label, name, mode, as_is, runs, fmt, count):
+    cells = [fmt % as_is if as_is is not None else 'x']
+    cells += [fmt % statistics.median(runs), (fmt % min(runs)).rstrip('×') + '–' + fmt % max(runs)] if runs else ['x', 'x']
+    print(f'| {label} | {name} | {mode} | ' + ' | '.join(cells) + f' | {count(runs)} |')
+
+def ratio(label, name, mode, seed):
+    a, b = ate(label, name, mode, seed), ate(label, name, modes[0], seed)
     return a / b if a is not None and b else None
-base = ratio(0)
-runs = [r for r in (ratio(s) for s in seeds) if r is not None]
-cells = [f'{base:.2f}×' if base is not None else 'x']
-if runs:
-    cells += [f'{statistics.median(runs):.2f}×', f'{min(runs):.2f}–{max(runs):.2f}×',
-              f'{sum(r <= 1.0 for r in runs)} of {len(runs)}']
-else:
-    cells += ['x', 'x', '0 of 0']
-print(f'| {label} | {name} | {mode} | ' + ' | '.join(cells) + ' |')
+
+seqs = [(item.split(' ', 1)[0], os.path.basename(item.split(' ', 1)[1])) for item in items]
+print(f'| images | sequence | mode | ATE as is (m) | {permille} ‰ of tracks withheld: median (m) | min–max (m) | seeds |')
+print('| --- | --- | --- | --- | --- | --- | --- |')
+for label, name in seqs:
+    for mode in modes:
+        runs = [a for a in (ate(label, name, mode, s) for s in seeds) if a is not None]
+        row(label, name, mode, ate(label, name, mode, 0), runs, '%.4f', lambda r: f'{len(r)} of {len(seeds)}')
+if len(modes) >= 2:
+    print(f'\n| images | sequence | mode / {modes[0]} | as is | withheld: median | min–max | seeds at or below 1.0× |')
+    print('| --- | --- | --- | --- | --- | --- | --- |')
+    for label, name in seqs:
+        for mode in modes[1:]:
+            runs = [r for r in (ratio(label, name, mode, s) for s in seeds) if r is not None]
+            row(label, name, mode, ratio(label, name, mode, 0), runs, '%.2f×',
+                lambda r: f'{sum(x <= 1.0 for x in r)} of {len(r)}')
 EOF
-  done
-done
