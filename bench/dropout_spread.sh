@@ -24,33 +24,21 @@ MODES=${MODES:-baseline}
 JOBS=${JOBS:-2}
 mkdir -p "$OUT"
 
+# shellcheck source=bench/sim_runs.sh
+. "$(dirname "$0")/sim_runs.sh"
+
 # One run: LABEL SEQ MODE SEED (seed 0: as is).
 run_one() {
-  local label=$1 seq=$2 mode=$3 seed=$4 name dir cfg
-  name=$(basename "$seq")
-  dir=$OUT/$label/${name}_${mode}_s$seed
-  # done unless missing or partial (a run stopped by a signal writes a partial stats.json)
-  [ -f "$dir/stats.json" ] && ! grep -q '"partial": *true' "$dir/stats.json" && return 0
-  rm -rf "$dir"
-  mkdir -p "$dir.config"
-  cp "$seq"/config/*.yaml "$dir.config/"
-  cfg=$dir.config/sim_stereo_imu_config.yaml
-  sed -i -e '/^track_dropout_/d' "$cfg"
-  [ "$seed" = 0 ] || printf 'track_dropout_permille: %s\ntrack_dropout_seed: %s\n' "$PERMILLE" "$seed" >> "$cfg"
-  "$IDY" run -c "$cfg" -d "$seq" -o "$dir" --mode "$mode" --threads 1 > "$dir.log" 2>&1 ||
-    echo "idyvins $mode failed on $seq (seed $seed): $dir.log" >&2
+  local label=$1 seq=$2 mode=$3 seed=$4 dir keys
+  dir=$OUT/$label/$(basename "$seq")_${mode}_s$seed
+  keys=(track_dropout_permille= track_dropout_seed=)
+  [ "$seed" = 0 ] || keys=("track_dropout_permille=$PERMILLE" "track_dropout_seed=$seed")
+  sim_run "$IDY" "$dir" "$seq" "$mode" "${keys[@]}"
 }
-export -f run_one
+export -f run_one sim_run
 export OUT IDY PERMILLE
 
-seqs=()
-for spec in "$@"; do
-  label=${spec%%=*}; data=${spec#*=}
-  for seq in "$data"/*_none_s*; do
-    [ -f "$seq/meta.json" ] && seqs+=("$label $seq")
-  done
-done
-[ ${#seqs[@]} -gt 0 ] || { echo "no static sequences (*_none_s*/meta.json) in: $*" >&2; exit 1; }
+sim_sequences '*_none_s*' "$@"
 for item in "${seqs[@]}"; do
   for mode in $MODES; do
     for seed in 0 $SEEDS; do echo "$item $mode $seed"; done

@@ -26,9 +26,12 @@ MODE=${MODE:-idy}
 JOBS=${JOBS:-2}
 mkdir -p "$OUT"
 
+# shellcheck source=bench/sim_runs.sh
+. "$(dirname "$0")/sim_runs.sh"
+
 # One run: LABEL SEQ RULE KEYS (rule "default", keys "-": the config as rendered).
 run_one() {
-  local label=$1 seq=$2 rule=$3 keys=$4 dir cfg kv when=
+  local label=$1 seq=$2 rule=$3 keys=$4 dir when='' kvs=()
   dir=$OUT/$label/$rule/$(basename "$seq")
   case $keys in *@*) when=${keys#*@}; keys=${keys%@*} ;; esac
   if [ -n "$when" ]; then
@@ -39,34 +42,19 @@ run_one() {
       [ "$when" = lacks ] || { mkdir -p "$(dirname "$dir")"; touch "$dir.na"; return 0; }
     fi
   fi
-  # done unless missing or partial (a run stopped by a signal writes a partial stats.json)
-  [ -f "$dir/stats.json" ] && ! grep -q '"partial": *true' "$dir/stats.json" && return 0
-  rm -rf "$dir"
-  mkdir -p "$dir.config"
-  cp "$seq"/config/*.yaml "$dir.config/"
-  cfg=$dir.config/sim_stereo_imu_config.yaml
-  if [ "$keys" != - ]; then
-    IFS=, read -ra kvs <<< "$keys"
-    for kv in "${kvs[@]}"; do
-      sed -i -e "/^${kv%%=*}:/d" "$cfg"
-      printf '%s: %s\n' "${kv%%=*}" "${kv#*=}" >> "$cfg"
-    done
-  fi
-  "$IDY" run -c "$cfg" -d "$seq" -o "$dir" --mode "$MODE" --threads 1 > "$dir.log" 2>&1 ||
-    echo "idyvins $MODE failed on $seq ($rule): $dir.log" >&2
+  [ "$keys" = - ] || IFS=, read -ra kvs <<< "$keys"
+  sim_run "$IDY" "$dir" "$seq" "$MODE" "${kvs[@]}"
 }
-export -f run_one
+export -f run_one sim_run
 export OUT IDY MODE
 
-seqs=()
-for spec in "$@"; do
-  label=${spec%%=*}; data=${spec#*=}; glob='*'
-  case $data in *:*) glob=${data#*:}; data=${data%%:*} ;; esac
-  for seq in "$data"/$glob; do
-    [ -f "$seq/meta.json" ] && seqs+=("$label $seq")
-  done
+rule_re='^[^:]+:[^=,@]+=[^,@]*(,[^=,@]+=[^,@]*)*(@has|@lacks)?$'
+for rule in $RULES; do
+  [[ $rule =~ $rule_re ]] && continue
+  echo "RULES: '$rule' is not NAME:key=value[,key=value...][@has|@lacks]" >&2
+  exit 2
 done
-[ ${#seqs[@]} -gt 0 ] || { echo "no simulated sequences (*/meta.json) in: $*" >&2; exit 1; }
+sim_sequences '*' "$@"
 for item in "${seqs[@]}"; do
   echo "$item default -"
   for rule in $RULES; do echo "$item ${rule%%:*} ${rule#*:}"; done
