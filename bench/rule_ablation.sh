@@ -31,16 +31,15 @@ mkdir -p "$OUT"
 
 # One run: LABEL SEQ RULE KEYS (rule "default", keys "-": the config as rendered).
 run_one() {
-  local label=$1 seq=$2 rule=$3 keys=$4 dir when='' kvs=()
+  local label=$1 seq=$2 rule=$3 keys=$4 dir when='' config=lacks kvs=()
   dir=$OUT/$label/$rule/$(basename "$seq")
   case $keys in *@*) when=${keys#*@}; keys=${keys%@*} ;; esac
-  if [ -n "$when" ]; then
-    # @has / @lacks: a rule for the configs that set (or do not set) its first key
-    if grep -q "^${keys%%=*}:" "$seq/config/sim_stereo_imu_config.yaml"; then
-      [ "$when" = has ] || { mkdir -p "$(dirname "$dir")"; touch "$dir.na"; return 0; }
-    else
-      [ "$when" = lacks ] || { mkdir -p "$(dirname "$dir")"; touch "$dir.na"; return 0; }
-    fi
+  # @has / @lacks: a rule for the configs that set (or do not set) its first key
+  grep -q "^${keys%%=*}:" "$seq/config/sim_stereo_imu_config.yaml" && config=has
+  if [ -n "$when" ] && [ "$when" != "$config" ]; then
+    mkdir -p "$(dirname "$dir")"
+    touch "$dir.na"
+    return 0
   fi
   [ "$keys" = - ] || IFS=, read -ra kvs <<< "$keys"
   sim_run "$IDY" "$dir" "$seq" "$MODE" "${kvs[@]}"
@@ -82,7 +81,7 @@ def signed(x, digits):
     return f'{x:+.{digits}f}'.replace('-', '−')
 
 def change(label, rule, name):
-    """(ATE off / on, moving points or None, static points), 'na' or None."""
+    """(ATE with the keys / as rendered, moving points or None, static points), 'na' or None."""
     on, off = result(label, 'default', name), result(label, rule, name)
     if off == 'na':
         return 'na'
