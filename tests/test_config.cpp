@@ -259,6 +259,9 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
                    .idy.lost_track_test);
   expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "lost_track_test: yes\n", kCamera)); },
               "lost_track_test");
+  EXPECT_TRUE(c.idy.follow_eliminated);  // default
+  EXPECT_FALSE(loadConfig(writeConfig(dir, std::string(kConfig) + "follow_eliminated: 0\n", kCamera))
+                   .idy.follow_eliminated);
   EXPECT_FALSE(c.estimator.estimate_td);
   EXPECT_DOUBLE_EQ(c.estimator.td_s, 0.0);
   EXPECT_TRUE(c.idy.stereo.enabled);  // defaults of the stereo motion test

@@ -532,6 +532,21 @@ TEST(Modes, EveryModeHasARowAndTheRowsAreThePapersTableI) {
   EXPECT_TRUE(traitsOf(Mode::kSeg).needs_masks);
 }
 
+TEST(Modes, FollowEliminatedKeyEndsEliminatedTracksOnlyWhereTheModeFollowsThem) {
+  Config c = sim::rigConfig(sim::SimOptions{});
+  for (Mode mode : {Mode::kIdy, Mode::kIdyPre, Mode::kIdyBa, Mode::kBaseline}) {
+    c.mode = mode;
+    const bool follows = traitsOf(mode).follow_eliminated;
+    c.idy.follow_eliminated = true;
+    EXPECT_EQ(optionsFor(c).tracker.keep_following_eliminated, follows) << toString(mode);
+    c.idy.follow_eliminated = false;
+    const ModeOptions off = optionsFor(c);
+    EXPECT_FALSE(off.tracker.keep_following_eliminated) << toString(mode);
+    // The lost-corner test does not depend on it.
+    EXPECT_EQ(off.tracker.judge_lost_new_tracks, follows && c.idy.lost_track_test) << toString(mode);
+  }
+}
+
 TEST(PipelineSystem, RejectsConfigsAndFramesItCannotRun) {
   sim::SimOptions o;
   Config config = sim::rigConfig(o);

@@ -60,6 +60,11 @@ struct IdyOptions {
   /// as a static stereo point (frontend::TrackerParams::judge_lost_new_tracks). Labels and
   /// dynamic map only: such a corner never constrains the estimate.
   bool lost_track_test = true;
+  /// Extension of §4.3 (not in the paper): in idy and idy-pre the tracker keeps following
+  /// the features the filter eliminated (never handed to the estimator again) so that no new
+  /// corner is seeded on the same moving object (frontend::TrackerParams::
+  /// keep_following_eliminated). Off: an eliminated track ends, as DESIGN §4.3 says.
+  bool follow_eliminated = true;
   StereoMotionOptions stereo;
   // The lost-corner test (lost_track_test).
   double lost_stereo_sigma_px = 0.25;   ///< per-coordinate match noise behind the depth tolerance
@@ -84,6 +89,7 @@ struct IdyOptions {
             lambda_dy_c);
     v.param({"confirm_outliers_dynamic", "0/1, outlier landmarks confirmed dynamic"}, confirm_outliers);
     v.param({"lost_track_test", "0/1, lost new corners judged (idy, idy-pre)"}, lost_track_test);
+    v.param({"follow_eliminated", "0/1, eliminated features still followed (idy, idy-pre)"}, follow_eliminated);
     v.section("IDY-VINS stereo motion test (DESIGN §4.9)");
     StereoMotionOptions& m = stereo;
     v.param({"stereo_motion_test", "0/1"}, m.enabled);

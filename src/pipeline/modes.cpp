@@ -26,8 +26,9 @@ ModeOptions optionsFor(const Config& c) {
   const ModeTraits& m = traitsOf(c.mode);
   ModeOptions o{c.tracker, c.estimator, c.idy};
   // Eliminated features never reach the estimator again, but the tracker keeps following
-  // them so that no new corner is seeded on the same moving object (DESIGN §4.9).
-  o.tracker.keep_following_eliminated = m.follow_eliminated;
+  // them so that no new corner is seeded on the same moving object (DESIGN §4.9;
+  // `follow_eliminated: 0` ends their tracks).
+  o.tracker.keep_following_eliminated = m.follow_eliminated && c.idy.follow_eliminated;
   o.tracker.judge_lost_new_tracks = m.follow_eliminated && c.idy.lost_track_test;
   o.estimator.candidate_weights = o.estimator.post_process = m.weights_and_post;  // DESIGN §4.5, §4.6
   o.estimator.confirm_outliers = m.weights_and_post && c.idy.confirm_outliers;     // DESIGN §4.9
