@@ -14,8 +14,7 @@ REASONS = ('klt', 'backward', 'alignment', 'border', 'pruned')
 
 if len(sys.argv) < 2 or any('=' not in a for a in sys.argv[1:]):
     sys.exit(__doc__)
-print('| runs | count | features per frame | tracks ended per frame | ' + ' | '.join(REASONS) + ' |')
-print('| --- ' * (4 + len(REASONS)) + '|')
+rows = []
 for arg in sys.argv[1:]:
     label, dirs = arg.split('=', 1)
     frames = features = 0
@@ -34,5 +33,8 @@ for arg in sys.argv[1:]:
     if frames == 0 or features == 0:
         sys.exit(f'{label}: no frames with features')
     total = sum(lost.values())
-    print(f'| {label} | {len(dirs)} | {features / frames:.0f} | {total / frames:.1f} ({100 * total / features:.0f} %) | '
-          + ' | '.join(f'{lost[k] / frames:.1f}' for k in REASONS) + ' |')
+    rows.append(f'| {label} | {len(dirs)} | {features / frames:.0f} | {total / frames:.1f} ({100 * total / features:.0f} %) | '
+                + ' | '.join(f'{lost[k] / frames:.1f}' for k in REASONS) + ' |')
+print('| runs | count | features per frame | tracks ended per frame | ' + ' | '.join(REASONS) + ' |')
+print('| --- ' * (4 + len(REASONS)) + '|')
+print('\n'.join(rows))
