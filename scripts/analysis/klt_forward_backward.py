@@ -11,7 +11,8 @@ point and where the backward KLT ends (99 px when either direction fails) and th
 above the tracker's `flow_back_px` (0.5), for KLT started at the previous position (as the
 tracker does) and started where the ground-truth rotation between the two frames puts the
 corner (a rotation-only prediction, the best a gyroscope could give), and for two wider
-windows. A share that the rotation does not lower is not a capture-range problem.
+windows; and the median image motion of the corners KLT followed both ways (first setting). A
+share that the rotation does not lower is not a capture-range problem.
 """
 import os
 import sys
@@ -50,7 +51,7 @@ def rotated(i, p0):
 
 
 def distances(window, start_rotated):
-    d = []
+    d, motion = [], []
     for i in range(first, min(last, len(names) - 1), step):
         a, b = image(i), image(i + 1)
         p0 = cv2.goodFeaturesToTrack(a, 150, 0.01, 30)
@@ -65,9 +66,11 @@ def distances(window, start_rotated):
         back, ok2, _ = cv2.calcOpticalFlowPyrLK(b, a, p1, p0.copy(), winSize=win, maxLevel=1, criteria=crit,
                                                 flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
         fb = np.linalg.norm((back - p0)[:, 0, :], axis=1)
-        fb[(ok1[:, 0] == 0) | (ok2[:, 0] == 0)] = 99
+        failed = (ok1[:, 0] == 0) | (ok2[:, 0] == 0)
+        fb[failed] = 99
         d.extend(fb)
-    return np.array(d)
+        motion.extend(np.linalg.norm((p1 - p0)[:, 0, :], axis=1)[~failed])
+    return np.array(d), np.array(motion)
 
 
 print(f'{ds}: frames {first}..{last} step {step}')
@@ -75,6 +78,8 @@ for label, window, start_rotated in (('13 px, from the previous position', 13, F
                                      ('13 px, from the ground-truth rotation', 13, True),
                                      ('21 px, from the previous position', 21, False),
                                      ('31 px, from the previous position', 31, False)):
-    fb = distances(window, start_rotated)
+    fb, motion = distances(window, start_rotated)
+    if not len(fb):
+        sys.exit(f'{ds}: no corners on frames {first}..{last}')
     print(f'  {label}: {len(fb)} corners, median {np.median(fb):.3f} px, p90 {np.percentile(fb, 90):.2f} px, '
-          f'above 0.5 px {100 * np.mean(fb > 0.5):.1f} %')
+          f'above 0.5 px {100 * np.mean(fb > 0.5):.1f} %, image motion median {np.median(motion):.1f} px')
