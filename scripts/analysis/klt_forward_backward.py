@@ -26,14 +26,20 @@ if len(sys.argv) not in (2, 5):
     sys.exit(__doc__)
 ds = sys.argv[1]
 first, last, step = (int(a) for a in sys.argv[2:5]) if len(sys.argv) == 5 else (200, 600, 8)
+if not os.path.isfile(ds + '/config/sim_stereo_imu_config.yaml') or not os.path.isdir(ds + '/mav0/cam0/data'):
+    sys.exit(f'{ds}: not a render of idyvins simulate (config/sim_stereo_imu_config.yaml, mav0/cam0/data expected)')
 rig = Rig(ds)
-names = sorted(os.listdir(ds + '/mav0/cam0/data'))
+names = sorted(n for n in os.listdir(ds + '/mav0/cam0/data') if n.endswith('.png'))
 stamps = [int(n[:-4]) for n in names]
 crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 0.01)
 
 
 def image(i):
-    return cv2.imread(f'{ds}/mav0/cam0/data/{names[i]}', cv2.IMREAD_GRAYSCALE)
+    path = f'{ds}/mav0/cam0/data/{names[i]}'
+    img = cv2.imread(path, cv2.IMREAD_GRAYSCALE)
+    if img is None:
+        sys.exit(f'{path}: not a readable image')
+    return img
 
 
 def rotated(i, p0):
