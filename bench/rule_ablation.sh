@@ -21,7 +21,7 @@ IDY=$1; OUT=$2; shift 2
 RULES=${RULES:-confirm_outliers:confirm_outliers_dynamic=0 lost_track_test:lost_track_test=0 \
 move_with_eliminated:move_with_eliminated_px=0 left_chi2:stereo_motion_left_chi2=0 \
 noise_ref:stereo_motion_noise_ref=0 remove_chi2_0:stereo_motion_remove_chi2=0@has \
-remove_chi2_80:stereo_motion_remove_chi2=80@lacks}
+remove_chi2_80:stereo_motion_remove_chi2=80@lacks follow_eliminated:follow_eliminated=0}
 MODE=${MODE:-idy}
 JOBS=${JOBS:-2}
 mkdir -p "$OUT"
