@@ -6,9 +6,10 @@ OBS.csv is `idyvins run --dump-observations` of an undistorted render DATASET. E
 track seen at least 6 times is triangulated from its left-image positions and the ground-truth
 camera poses; the point, projected into the right camera, is where a right match should be.
 Prints the error du = found - predicted right u (positive: disparity too small, depth too
-large) of the tracker's own right matches (the dump's u_right; overall, by depth and per
-track), then of cv2.calcOpticalFlowPyrLK searching the right image from the left position
-(every 3rd observation of every 2nd frame) with several windows and pyramid depths. Also
+large) of the tracker's own right matches (the dump's u_right; overall, by depth, with the
+share more than 2 px off and the rest's mean, and per track), then of cv2.calcOpticalFlowPyrLK
+searching the right image from the left position (every 3rd observation of every 2nd frame)
+with several windows and pyramid depths. Also
 prints how well the tracks fit their triangulated points.
 """
 import csv
@@ -64,7 +65,10 @@ if tracker:
     for lo, hi in [(0, 5), (5, 10), (10, 20), (20, 40), (40, np.inf)]:
         s = r[(r[:, 2] >= lo) & (r[:, 2] < hi)]
         if len(s):
-            print(f'  {lo}-{hi} m: {len(s)}, du mean {s[:, 0].mean():+.4f} median {np.median(s[:, 0]):+.4f} px')
+            near = s[np.abs(s[:, 0]) < 2, 0]
+            print(f'  {lo}-{hi} m: {len(s)}, du mean {s[:, 0].mean():+.4f} median {np.median(s[:, 0]):+.4f} px; '
+                  f'|du| > 2 px {100 * np.mean(np.abs(s[:, 0]) >= 2):.2f} % (du > 2 px {100 * np.mean(s[:, 0] >= 2):.2f} %), '
+                  f'within 2 px mean {near.mean():+.4f} median {np.median(near):+.4f} px')
     t = np.array(per_track)
     big = t[np.abs(t) > 0.2]
     print(f'  per track (4+ matches): {len(t)} tracks, {100 * len(big) / len(t):.1f} % with mean |du| > 0.2 px, '
