@@ -2,9 +2,10 @@
 """Which mechanism flagged the static observations of an idy run, and on what kind of corners.
 
 Usage: scripts/analysis/static_flag_causes.py OBS.csv [DATASET]
-OBS.csv is `idyvins run --dump-observations` of an idy run. Counts every static observation of
-a flagged track (as the run summary does) by the first reason the track was flagged:
-lost-corner test, d_s elimination, stereo motion test, candidate or outlier confirmed dynamic.
+OBS.csv is `idyvins run --dump-observations` of an idy run. Counts the observations of every
+flagged track that lies wholly on static surfaces (the run summary's static share also counts the
+static observations of tracks partly on moving objects) by the first reason the track was
+flagged: lost-corner test, d_s elimination, stereo motion test, candidate or outlier confirmed.
 With DATASET (the undistorted render the run read; Debian python3 with numpy, yaml, cv2) it also
 prints, per cause and for the tracks never flagged, how edge-like the corners are (λ_min / λ_max
 of the 15 x 15 px structure tensor of the left image where the track was first flagged, where it
