@@ -49,6 +49,18 @@ class Rig:
         x, y = self.distort(cam, pc[0] / pc[2], pc[1] / pc[2])
         return np.array([k['fx'] * x + k['cx'], k['fy'] * y + k['cy']]), pc[2]
 
+    def triangulate(self, t_uv):
+        """World point seen at left pixels [(t_ns, (u, v)), ...]: least squares of x × (R^T (X − p)) = 0
+        over the observations, with the ground-truth poses."""
+        A, b = [], []
+        for t, uv in t_uv:
+            R, p = self.pose[t][0]
+            x = self.normalized(0, uv)
+            M = np.array([[0, -x[2], x[1]], [x[2], 0, -x[0]], [-x[1], x[0], 0]]) @ R.T
+            A.append(M)
+            b.append(M @ p)
+        return np.linalg.lstsq(np.vstack(A), np.concatenate(b), rcond=None)[0]
+
     def normalized(self, cam, uv):
         """The undistorted normalized ray (x, y, 1) of pixel uv (fixed-point inversion)."""
         k = self.K[cam]

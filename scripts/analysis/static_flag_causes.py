@@ -91,21 +91,11 @@ def isotropy(r):
     return e[0] / e[1] if e[1] > 0 else None
 
 
-def skew(x):
-    return np.array([[0, -x[2], x[1]], [x[2], 0, -x[0]], [-x[1], x[0], 0]])
-
-
 def right_miss(t):
     """Largest |found - predicted| right u of a track seen 6+ times (None: shorter or no right match)."""
     if len(t) < 6:
         return None
-    A, b = [], []
-    for r in t:
-        R, p = rig.pose[int(r['t_ns'])][0]
-        M = skew(rig.normalized(0, (float(r['u']), float(r['v'])))) @ R.T
-        A.append(M)
-        b.append(M @ p)
-    X = np.linalg.lstsq(np.vstack(A), np.concatenate(b), rcond=None)[0]
+    X = rig.triangulate([(int(r['t_ns']), (float(r['u']), float(r['v']))) for r in t])
     du = [abs(float(r['u_right']) - rig.project(1, int(r['t_ns']), X)[0][0]) for r in t if r.get('u_right')]
     return max(du) if du else None
 

@@ -33,21 +33,11 @@ for r in csv.DictReader(open(obs_file)):
             right[(r['id'], int(r['t_ns']))] = (float(r['u_right']), float(r['v_right']))
 
 
-def skew(x):
-    return np.array([[0, -x[2], x[1]], [x[2], 0, -x[0]], [-x[1], x[0], 0]])
-
-
 per_frame, residuals, tracker, per_track = defaultdict(list), [], [], []
 for tid, ob in tracks.items():
     if len(ob) < 6:
         continue
-    A, b = [], []
-    for t, u, v in ob:  # x × (R^T (X - p)) = 0 for each observation
-        R, p = rig.pose[t][0]
-        M = skew(rig.normalized(0, (u, v))) @ R.T
-        A.append(M)
-        b.append(M @ p)
-    X = np.linalg.lstsq(np.vstack(A), np.concatenate(b), rcond=None)[0]
+    X = rig.triangulate([(t, (u, v)) for t, u, v in ob])
     for t, u, v in ob:
         residuals.append(np.linalg.norm(rig.project(0, t, X)[0] - (u, v)))
     for t, u, v in ob[::3]:
