@@ -379,6 +379,45 @@ TEST(Estimator, OutliersConfirmedDynamicOnlyWhenEnabled) {
   EXPECT_LT(on.ate, 0.01 * on.path);
 }
 
+TEST(Estimator, RightMatchesThatSlidDropOutAndTheLeftTrackStays) {
+  // EstimatorOptions::stereo_outlier_px: from frame 50 on, the right matches of every third
+  // track then 10+ frames old slide 3 px along the epipolar line (as along an edge). Judged
+  // alone, those right observations drop out after a solve and their landmarks stay (the
+  // whole-landmark outlier test reads the left observations only); not judged, they bias
+  // the depths.
+  auto run = [](double stereo_outlier_px, bool slide, int& corrupted, int& dropped, int& removed) {
+    std::set<std::uint64_t> slid;
+    auto hook = [&, slide](std::size_t k, frontend::FeatureFrame& ff) {
+      if (!slide || k < 50) return;
+      for (auto& f : ff.features) {
+        if (k == 50 && f.has_right && f.track_length >= 10 && f.id % 3 == 0) slid.insert(f.id);
+        if (!f.has_right || !slid.count(f.id)) continue;
+        f.xy_right.x() += 3.0 / 460.0;
+        ++corrupted;
+      }
+    };
+    EstimatorOptions opt;
+    opt.stereo_outlier_px = stereo_outlier_px;
+    return runSequence(options("city", 4.0), hook, opt, {}, [&](const FrameResult& fr) {
+      dropped += fr.right_outliers;
+      removed += static_cast<int>(fr.outlier_ids.size());
+    });
+  };
+  int c_clean = 0, d_clean = 0, r_clean = 0, c_on = 0, d_on = 0, r_on = 0, c_off = 0, d_off = 0, r_off = 0;
+  const RunResult clean = run(1.0, false, c_clean, d_clean, r_clean);
+  const RunResult on = run(1.0, true, c_on, d_on, r_on);
+  const RunResult off = run(0.0, true, c_off, d_off, r_off);
+  std::printf("clean: %d right observations dropped, ATE %.4f m; slid (%d): judged alone %d dropped, %d landmarks "
+              "removed (clean %d), ATE %.4f m; not judged: %d dropped, ATE %.4f m\n",
+              d_clean, clean.ate, c_on, d_on, r_on, r_clean, on.ate, d_off, off.ate);
+  ASSERT_GT(c_on, 300);
+  EXPECT_EQ(d_off, 0);
+  EXPECT_GE(d_on - d_clean, c_on * 85 / 100);  // nearly every slid right match dropped
+  EXPECT_LE(r_on, r_clean + 5);              // their landmarks stay
+  EXPECT_LT(on.ate, off.ate);
+  EXPECT_LT(on.ate, 1.5 * clean.ate);
+}
+
 TEST(Initializer, AlignmentRecoversGravityAndVelocityFromExactData) {
   sim::SimOptions o = options("city", 1.0);
   o.imu.scale = 0.0;

@@ -445,6 +445,9 @@ OffsetRun runWithOffset(double config_td_s, bool estimate) {
   Config config = seq.rig;
   config.estimator.td_s = config_td_s;
   config.estimator.estimate_td = estimate;
+  // One measurement model for the three runs: with estimate_td right observations are not
+  // judged alone (EstimatorOptions::stereo_outlier_px), so neither are they here with td known.
+  config.estimator.stereo_outlier_px = 0.0;
   config.mode = Mode::kBaseline;
   System system(config);
   struct Recorder final : FrameObserver {

@@ -715,6 +715,29 @@ void Estimator::removeOutliers(FrameResult& r) {
     }
   }
   fm_.remove(bad);
+  // Not while estimating td: with it, the PipelineTimeOffset test's run is 1.18x the run with
+  // td known (0.0032 / 0.0027 m; bound 1.10x), also with the observations moved to the
+  // estimated offset as the factors move them. Why is not settled.
+  if (options_.stereo_outlier_px > 0 && !estimatesTd()) r.right_outliers = dropRightOutliers();
+}
+
+int Estimator::dropRightOutliers() {
+  int dropped = 0;
+  for (auto& [id, lm] : fm_.landmarks()) {
+    if (!lm.usable() || !std::isfinite(lm.inv_depth)) continue;
+    const Vector3d pts_i(lm.anchorRay().x(), lm.anchorRay().y(), 1.0);
+    const imu::NavState si = frames_[lm.start_frame].nav();
+    for (std::size_t k = 0; k < lm.obs.size(); ++k) {
+      Observation& o = lm.obs[k];
+      if (!o.has_right) continue;
+      const imu::NavState sj = frames_[lm.start_frame + static_cast<int>(k)].nav();
+      const Vector3d p = transferPoint(pts_i, lm.inv_depth, si.p_w_b, si.q_w_b, sj.p_w_b, sj.q_w_b, rig_.T_b_c0, rig_.T_b_c1);
+      if (p.z() > 0 && (p.head<2>() / p.z() - o.xy_right).norm() * rig_.focal_px <= options_.stereo_outlier_px) continue;
+      o.has_right = false;
+      ++dropped;
+    }
+  }
+  return dropped;
 }
 
 bool Estimator::failureDetected(std::string& why) const {

@@ -105,6 +105,7 @@ struct FrameResult {
   int cleared = 0;           ///< candidates cleared to static after this solve
   std::vector<std::uint64_t> outlier_ids;  ///< landmarks removed by the outlier test after this solve
   int outliers_confirmed = 0;  ///< of those, confirmed dynamic (EstimatorOptions::confirm_outliers)
+  int right_outliers = 0;  ///< right observations dropped after this solve (EstimatorOptions::stereo_outlier_px)
   /// Landmarks confirmed dynamic at this frame (post-processing and confirmed outliers), where
   /// they were: the dynamic map's confirmed points (pipeline::System collects them).
   std::vector<MapPoint> confirmed_points;
@@ -207,6 +208,8 @@ class Estimator {
   /// Moves the window back so that its oldest frame keeps its yaw and position (backend/gauge.h).
   void restoreGauge(const Eigen::Isometry3d& T_w_b0_before);
   void removeOutliers(FrameResult& result);
+  /// EstimatorOptions::stereo_outlier_px: right observations that do not fit their landmark.
+  int dropRightOutliers();
   void postProcess(FrameResult& result);
   /// Mean left-camera reprojection error (px) of a landmark from its anchor into its other
   /// observations, or into its newest `last_n` ones only (0: all).

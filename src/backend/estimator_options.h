@@ -33,6 +33,12 @@ struct EstimatorOptions {
   double sigma_px = 0.5;
   double huber_px = 1.0;                ///< Huber threshold on the whitened residual
   double outlier_px = 3.0;              ///< mean reprojection error that removes a landmark
+  /// A right observation whose reprojection error after a solve exceeds this drops out of its
+  /// landmark (the left track stays; VINS-Fusion judges only whole landmarks, as outlier_px
+  /// does). A right match that slid along an edge or onto an occluder is off by pixels and
+  /// biases the depth, hence the scale (docs/results.md, right observations judged alone,
+  /// both families). 0: right observations are never judged alone; nor are they with estimate_td.
+  double stereo_outlier_px = 1.0;
   double init_rotation_check_deg = 3.0;  ///< PnP vs gyro disagreement that rejects an init frame
   int min_pnp_points = 15;
   int clear_after_observations = 4;  ///< a candidate that passes with this many observations becomes static
@@ -103,6 +109,9 @@ struct EstimatorOptions {
     v.param({"projection_huber", "Huber threshold on the whitened residual", ParamRule::kPositive}, huber_px);
     v.param({"outlier_px", "px, mean reprojection error that removes a landmark", ParamRule::kPositive},
             outlier_px);
+    v.param({"stereo_outlier_px", "px, reprojection error that drops one right observation (0: off; off with estimate_td)",
+             ParamRule::kNonNegative},
+            stereo_outlier_px);
     v.param({"init_rotation_check_deg", "deg, PnP vs gyro disagreement that rejects an init frame",
              ParamRule::kPositive},
             init_rotation_check_deg);

@@ -164,6 +164,7 @@ nlohmann::json StatsRecorder::frameJson(const FrameOutput& out) {
                      {"lost_tracks", toJson(ff.lost_tracks)},
                      {"lost_new", toJson(ff.lost_new)},
                      {"landmarks", r.landmarks},
+                     {"right_outliers", r.right_outliers},
                      {"keyframe", r.keyframe},
                      {"initialized", r.initialized},
                      {"td_s", r.td_s},
