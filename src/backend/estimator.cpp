@@ -724,7 +724,7 @@ void Estimator::removeOutliers(FrameResult& r) {
 int Estimator::dropRightOutliers() {
   int dropped = 0;
   for (auto& [id, lm] : fm_.landmarks()) {
-    if (!lm.usable() || !std::isfinite(lm.inv_depth)) continue;
+    if (!inSolve(lm)) continue;
     const Vector3d pts_i(lm.anchorRay().x(), lm.anchorRay().y(), 1.0);
     const imu::NavState si = frames_[lm.start_frame].nav();
     for (std::size_t k = 0; k < lm.obs.size(); ++k) {
