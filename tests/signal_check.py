@@ -5,8 +5,9 @@ signal_check.py IDYVINS WORK
 
 A first run (--frames 30) fills OUT. Runs into the same OUT are then stopped by SIGTERM and SIGINT
 at several points, and killed by SIGKILL at several points. After each, OUT holds one run, never a
-mix: either the previous one unchanged (killed, or stopped before the handler was in place), or the
-new one complete, or the new one marked partial ("partial": true, "stopped_by") with exit 128+signal;
+mix: either the previous one unchanged (killed, or stopped before the handler was in place, or stopped
+before the first frame with exit 128+signal), or the new one complete, or the new one marked partial
+("partial": true, "stopped_by") with exit 128+signal;
 every file of the set present, none under a temporary name, trajectory.tum and state.csv with as
 many poses as stats.json says.
 """
@@ -70,6 +71,8 @@ def main(idy, work):
         s = consistent(out, what)
         if p.returncode == 0:  # finished before the signal
             check(s is not None and not s["partial"], what + ": complete")
+        elif p.returncode == 128 + sig and "before the first frame" in err:  # a loaded machine: nothing written
+            check(snapshot(out) == before, what + ": stopped before the first frame, OUT still the previous run")
         elif p.returncode == 128 + sig:
             check(s is not None and s["partial"] and s["stopped_by"] == signal.Signals(sig).name,
                   what + ": marked partial, stopped by %s" % signal.Signals(sig).name)

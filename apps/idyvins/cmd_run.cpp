@@ -306,6 +306,19 @@ void writeRunRecord(const std::string& dir, const RunArgs& a, const Config& conf
   if (!span.empty()) io::writeTum(dir + "/groundtruth.tum", span);
 }
 
+/// Says how a run stopped by `sig` (SIGINT, SIGTERM) after `frames` of `total` frames ended and
+/// returns its exit code, 128 + sig. Stopped before the first frame, it wrote nothing: OUT is
+/// as it was (the staging folder goes with the run).
+int reportStop(int sig, std::size_t frames, std::size_t total, const std::string& out) {
+  const char* name = sig == SIGINT ? "SIGINT" : "SIGTERM";
+  if (frames == 0)
+    std::fprintf(stderr, "stopped by %s before the first frame: nothing written, %s as it was\n", name, out.c_str());
+  else
+    std::fprintf(stderr, "stopped by %s after %zu of %zu frames: %s holds the partial result (summary \"partial\": true)\n",
+                 name, frames, total, out.c_str());
+  return 128 + sig;
+}
+
 int runRun(const RunArgs& a) {
   Config config;
   pipeline::System system = makeSystem(a, config);
@@ -325,6 +338,7 @@ int runRun(const RunArgs& a) {
   std::signal(SIGTERM, onStopSignal);
   const auto wall_start = std::chrono::steady_clock::now();
   const std::size_t frames = drive(*in.source, system, total);
+  if (frames == 0 && g_stop_signal != 0) return reportStop(g_stop_signal, 0, total, a.out);  // OUT untouched
   if (frames == 0) throw InputError(a.dataset, "no stereo frames");
   const pipeline::Result result = system.finish();  // completes the frame still in flight
   progress.finish();
@@ -359,9 +373,7 @@ int runRun(const RunArgs& a) {
   summary["last_status"] = result.summary.last_status;
   printSummary(summary, a.out);
   if (sig == 0) return kOk;
-  std::fprintf(stderr, "stopped by %s after %zu of %zu frames: %s holds the partial result (summary \"partial\": true)\n",
-               sig == SIGINT ? "SIGINT" : "SIGTERM", frames, total, a.out.c_str());
-  return 128 + sig;
+  return reportStop(sig, frames, total, a.out);
 }
 
 }  // namespace
