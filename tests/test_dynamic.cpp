@@ -236,6 +236,72 @@ TEST(IdyFilter, EliminatesMovingAndMarksBorderlineFeatures) {
   EXPECT_FALSE(filter.lastStats().prior_valid);
 }
 
+TEST(IdyFilter, DsScoredFromTheConfiguredObservationOn) {
+  // Features 8, 24, 72 and 216 px off their epipolar lines among static ones; the 216 px
+  // one is at its second observation, all others at their tenth. With ds_from_observation
+  // 3 that one is not scored (d_s 0, static, kept), and the rest is judged exactly as if
+  // it were absent.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.3 / kF);
+  const Motion m = randomMotion(rng);
+  const auto cam = pinholeCamera();
+  frontend::MotionPrior prior;
+  prior.valid = true;
+  prior.q_prev_cur = Eigen::Quaterniond(m.R);
+  prior.t_prev_cur = m.t;
+  const int n = 150;
+  std::vector<frontend::Feature> feats(n);
+  std::vector<frontend::FilterItem> items(n);
+  for (int i = 0; i < n; ++i) {
+    const Vector3d p_prev(4 * u(rng), 3 * u(rng), 4 + 8 * (u(rng) + 1));
+    Vector2d x1 = project(m.R.transpose() * (p_prev - m.t)) + Vector2d(noise(rng), noise(rng));
+    const Vector2d x0 = project(p_prev);
+    const Eigen::RowVector3d l = Vector3d(x0.x(), x0.y(), 1).transpose() * hat(m.t) * m.R;
+    if (i < 4) x1 += Vector2d(l(0), l(1)).normalized() * (216.0 / std::pow(3.0, i)) / kF;
+    feats[i].xy = x1;
+    feats[i].track_length = i == 0 ? 2 : 10;
+    items[i].feature = &feats[i];
+    items[i].tracked = true;
+    items[i].prev_xy = x0 + Vector2d(noise(rng), noise(rng));
+  }
+  frontend::FilterContext ctx{cam.get(), &prior, nullptr, 0, 50'000'000};
+  const auto filterWith = [&](int from, std::vector<frontend::FilterItem>& its) {
+    IdyOptions o;
+    o.ds_from_observation = from;
+    IdyFilter filter(o);
+    for (auto& f : feats) f.label = frontend::FeatureLabel::kStatic;
+    for (auto& it : its) it.remove = false;
+    filter.apply(ctx, its);
+    return filter.lastStats();
+  };
+  const FrameStats paper = filterWith(2, items);
+  EXPECT_TRUE(items[0].remove);
+  EXPECT_GT(feats[0].d_s_px2, 1000.0);
+  EXPECT_EQ(paper.d_s.size(), static_cast<std::size_t>(n));
+  std::vector<frontend::FilterItem> without(items.begin() + 1, items.end());
+  filterWith(2, without);
+  std::vector<bool> removed_without;
+  std::vector<frontend::FeatureLabel> labels_without;
+  for (const auto& it : without) {
+    removed_without.push_back(it.remove);
+    labels_without.push_back(it.feature->label);
+  }
+  const FrameStats third = filterWith(3, items);
+  EXPECT_FALSE(items[0].remove);
+  EXPECT_EQ(feats[0].d_s_px2, 0.0);
+  EXPECT_EQ(feats[0].label, frontend::FeatureLabel::kStatic);
+  EXPECT_EQ(third.d_s.size(), static_cast<std::size_t>(n - 1));
+  EXPECT_EQ(third.tracked, static_cast<std::size_t>(n));
+  int removed = 0;
+  for (int i = 1; i < n; ++i) {
+    EXPECT_EQ(items[i].remove, removed_without[i - 1]) << i;
+    EXPECT_EQ(feats[i].label, labels_without[i - 1]) << i;
+    removed += items[i].remove;
+  }
+  EXPECT_GE(removed, 1);  // the 72 px one at least
+}
+
 // Stereo motion test (extension of §4.3): a rig with the right camera 0.11 m to the
 // right of the left one, like the simulator's.
 Eigen::Isometry3d rightFromLeft() {

@@ -50,6 +50,11 @@ struct StereoMotionOptions {
 struct IdyOptions {
   double lambda_dy = 4.0;    ///< px², elimination threshold (eq. 4)
   double lambda_dy_c = 1.0;  ///< px², candidate threshold (eq. 6)
+  /// Extension of §4.2 (not in the paper): d_s is scored from a track's this-th observation
+  /// on; earlier observations are neither in the elimination set (eq. 4-5) nor candidates
+  /// (eq. 6), and their d_s_px2 stays 0. 2 = every tracked observation (the paper). A new
+  /// corner's first KLT step is the noisiest one on blurred images (docs/method.md).
+  int ds_from_observation = 2;
   /// Extension of §4.6 (not in the paper): in the modes with post-processing, a landmark
   /// that fails the 3 px outlier test is confirmed dynamic like a failing candidate (its
   /// track leaves the window for good, dynamic map) instead of being dropped and
@@ -87,6 +92,9 @@ struct IdyOptions {
     v.param({"lambda_dy", "px^2, elimination threshold (eq. 4)", ParamRule::kPositive}, lambda_dy);
     v.param({"lambda_dy_c", "px^2, candidate threshold (eq. 6), <= lambda_dy", ParamRule::kNonNegative},
             lambda_dy_c);
+    v.param({"ds_from_observation", "a track's observation from which d_s is scored, >= 2 (2 = the paper)",
+             ParamRule::kPositive},
+            ds_from_observation);
     v.param({"confirm_outliers_dynamic", "0/1, outlier landmarks confirmed dynamic"}, confirm_outliers);
     v.param({"lost_track_test", "0/1, lost new corners judged (idy, idy-pre)"}, lost_track_test);
     v.param({"follow_eliminated", "0/1, eliminated features still followed (idy, idy-pre)"}, follow_eliminated);
