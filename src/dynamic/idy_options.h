@@ -52,8 +52,9 @@ struct IdyOptions {
   double lambda_dy_c = 1.0;  ///< px², candidate threshold (eq. 6)
   /// Extension of §4.2 (not in the paper): d_s is scored from a track's this-th observation
   /// on; earlier observations are neither in the elimination set (eq. 4-5) nor candidates
-  /// (eq. 6), and their d_s_px2 stays 0. 2 = every tracked observation (the paper). A new
-  /// corner's first KLT step is the noisiest one on blurred images (docs/method.md).
+  /// (eq. 6), and their d_s_px2 stays 0. 2 (or 1) = every tracked observation (the paper).
+  /// 3 spares a new corner's first KLT step, the noisiest on blurred images; measured on
+  /// both families and left at 2 (docs/method.md).
   int ds_from_observation = 2;
   /// Extension of §4.6 (not in the paper): in the modes with post-processing, a landmark
   /// that fails the 3 px outlier test is confirmed dynamic like a failing candidate (its
