@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <numeric>
 #include <random>
 
@@ -185,35 +186,50 @@ TEST(CandidateWeight, InformationIsOneOverMFlooredAtOnePixel) {
   EXPECT_DOUBLE_EQ(candidateInformation(0.0), 1.0);
 }
 
-TEST(IdyFilter, EliminatesMovingAndMarksBorderlineFeatures) {
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::normal_distribution<double> noise(0.0, 0.3 / kF);
-  const Motion m = randomMotion(rng);
-  const auto cam = pinholeCamera();
+/// One frame of `n` tracked features under a random motion (seed 5, 0.3 px noise in both
+/// frames), feature i moved off its epipolar line by `off_px(i)` pixels.
+struct EpipolarScene {
   frontend::MotionPrior prior;
-  prior.valid = true;
-  prior.q_prev_cur = Eigen::Quaterniond(m.R);
-  prior.t_prev_cur = m.t;
-  std::vector<frontend::Feature> feats(150);
-  std::vector<frontend::FilterItem> items(150);
-  for (int i = 0; i < 150; ++i) {
-    const Vector3d p_prev(4 * u(rng), 3 * u(rng), 4 + 8 * (u(rng) + 1));
-    Vector2d x1 = project(m.R.transpose() * (p_prev - m.t)) + Vector2d(noise(rng), noise(rng));
-    // Moving features 8, 24, 72, 216 px off their epipolar lines. The greedy rule only
-    // removes a value that dominates the rest: with k equal errors, or a geometric run
-    // of similar ones, removing the largest does not lower the CV (third rule), and the
-    // marking + BA weights are what handles them (DESIGN §4.4-4.5).
-    const Vector2d x0 = project(p_prev);
-    const Eigen::RowVector3d l = Vector3d(x0.x(), x0.y(), 1).transpose() * hat(m.t) * m.R;
-    const Vector2d normal = Vector2d(l(0), l(1)).normalized();  // across the epipolar line
-    if (i < 4) x1 += normal * (8.0 * std::pow(3.0, i)) / kF;
-    if (i >= 10 && i < 15) x1 += normal * (1.5 + 0.06 * (i - 10)) / kF;  // slightly moving
-    feats[i].xy = x1;
-    items[i].feature = &feats[i];
-    items[i].tracked = true;
-    items[i].prev_xy = project(p_prev) + Vector2d(noise(rng), noise(rng));
+  std::vector<frontend::Feature> feats;
+  std::vector<frontend::FilterItem> items;  ///< point into feats
+  EpipolarScene(int n, const std::function<double(int)>& off_px) : feats(n), items(n) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::normal_distribution<double> noise(0.0, 0.3 / kF);
+    const Motion m = randomMotion(rng);
+    prior.valid = true;
+    prior.q_prev_cur = Eigen::Quaterniond(m.R);
+    prior.t_prev_cur = m.t;
+    for (int i = 0; i < n; ++i) {
+      const Vector3d p_prev(4 * u(rng), 3 * u(rng), 4 + 8 * (u(rng) + 1));
+      Vector2d x1 = project(m.R.transpose() * (p_prev - m.t)) + Vector2d(noise(rng), noise(rng));
+      const Vector2d x0 = project(p_prev);
+      const Eigen::RowVector3d l = Vector3d(x0.x(), x0.y(), 1).transpose() * hat(m.t) * m.R;
+      const Vector2d normal = Vector2d(l(0), l(1)).normalized();  // across the epipolar line
+      feats[i].xy = x1 + normal * off_px(i) / kF;
+      items[i].feature = &feats[i];
+      items[i].tracked = true;
+      items[i].prev_xy = x0 + Vector2d(noise(rng), noise(rng));
+    }
   }
+  EpipolarScene(const EpipolarScene&) = delete;
+  EpipolarScene& operator=(const EpipolarScene&) = delete;
+};
+
+TEST(IdyFilter, EliminatesMovingAndMarksBorderlineFeatures) {
+  // Moving features 8, 24, 72, 216 px off their epipolar lines. The greedy rule only
+  // removes a value that dominates the rest: with k equal errors, or a geometric run
+  // of similar ones, removing the largest does not lower the CV (third rule), and the
+  // marking + BA weights are what handles them (DESIGN §4.4-4.5).
+  EpipolarScene scene(150, [](int i) {
+    if (i < 4) return 8.0 * std::pow(3.0, i);
+    if (i >= 10 && i < 15) return 1.5 + 0.06 * (i - 10);  // slightly moving
+    return 0.0;
+  });
+  const auto cam = pinholeCamera();
+  frontend::MotionPrior& prior = scene.prior;
+  std::vector<frontend::Feature>& feats = scene.feats;
+  std::vector<frontend::FilterItem>& items = scene.items;
   IdyFilter filter(4.0, 1.0);
   frontend::FilterContext ctx{cam.get(), &prior, nullptr, 0, 50'000'000};
   filter.apply(ctx, items);
@@ -241,30 +257,13 @@ TEST(IdyFilter, DsScoredFromTheConfiguredObservationOn) {
   // one is at its second observation, all others at their tenth. With ds_from_observation
   // 3 that one is not scored (d_s 0, static, kept), and the rest is judged exactly as if
   // it were absent.
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::normal_distribution<double> noise(0.0, 0.3 / kF);
-  const Motion m = randomMotion(rng);
-  const auto cam = pinholeCamera();
-  frontend::MotionPrior prior;
-  prior.valid = true;
-  prior.q_prev_cur = Eigen::Quaterniond(m.R);
-  prior.t_prev_cur = m.t;
   const int n = 150;
-  std::vector<frontend::Feature> feats(n);
-  std::vector<frontend::FilterItem> items(n);
-  for (int i = 0; i < n; ++i) {
-    const Vector3d p_prev(4 * u(rng), 3 * u(rng), 4 + 8 * (u(rng) + 1));
-    Vector2d x1 = project(m.R.transpose() * (p_prev - m.t)) + Vector2d(noise(rng), noise(rng));
-    const Vector2d x0 = project(p_prev);
-    const Eigen::RowVector3d l = Vector3d(x0.x(), x0.y(), 1).transpose() * hat(m.t) * m.R;
-    if (i < 4) x1 += Vector2d(l(0), l(1)).normalized() * (216.0 / std::pow(3.0, i)) / kF;
-    feats[i].xy = x1;
-    feats[i].track_length = i == 0 ? 2 : 10;
-    items[i].feature = &feats[i];
-    items[i].tracked = true;
-    items[i].prev_xy = x0 + Vector2d(noise(rng), noise(rng));
-  }
+  EpipolarScene scene(n, [](int i) { return i < 4 ? 216.0 / std::pow(3.0, i) : 0.0; });
+  const auto cam = pinholeCamera();
+  const frontend::MotionPrior& prior = scene.prior;
+  std::vector<frontend::Feature>& feats = scene.feats;
+  std::vector<frontend::FilterItem>& items = scene.items;
+  for (int i = 0; i < n; ++i) feats[i].track_length = i == 0 ? 2 : 10;
   frontend::FilterContext ctx{cam.get(), &prior, nullptr, 0, 50'000'000};
   const auto filterWith = [&](int from, std::vector<frontend::FilterItem>& its) {
     IdyOptions o;

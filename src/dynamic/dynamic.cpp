@@ -196,20 +196,19 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
   const bool fisheye = p.type == camera::ModelType::kKannalaBrandt;
   const double fx = fisheye ? ctx.camera->focal() : p.fx, fy = fisheye ? ctx.camera->focal() : p.fy;
   const Matrix3d R = ctx.prior->q_prev_cur.toRotationMatrix();
-  std::vector<std::size_t> scored;  // positions in `tracked` whose d_s is judged
+  std::vector<std::size_t> scored, scored_items;  // positions in `tracked` judged by d_s; their items
   std::vector<double> raw, ds;
   for (std::size_t k = 0; k < tracked.size(); ++k) {
     const auto& it = items[tracked[k]];
     it.feature->d_s_px2 = 0;
     if (std::max(it.feature->track_length, 2) < o_.ds_from_observation) continue;  // tracked: >= its 2nd
     scored.push_back(k);
+    scored_items.push_back(tracked[k]);
     raw.push_back(epipolarErrorPx2(it.prev_xy, it.feature->xy, R, ctx.prior->t_prev_cur, fx, fy));
     ds.push_back(raw.back() / sigma);
     it.feature->d_s_px2 = ds.back();
   }
   stats_.d_s = ds;
-  std::vector<std::size_t> scored_items(scored.size());
-  for (std::size_t j = 0; j < scored.size(); ++j) scored_items[j] = tracked[scored[j]];
   const std::vector<bool> removed_scored = eliminateAndMark(items, scored_items, raw, ds);
   std::vector<bool> removed(tracked.size(), false);
   for (std::size_t j = 0; j < scored.size(); ++j) removed[scored[j]] = removed_scored[j];
