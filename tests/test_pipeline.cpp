@@ -145,6 +145,29 @@ TEST(PipelineSystem, ImpossibleAndOutOfOrderImuSamplesAreDroppedAndCounted) {
   EXPECT_LT(ate(faulty), 1.5 * ate(clean) + 0.005) << "clean " << ate(clean);
 }
 
+TEST(PipelineSystem, ShortImuSpikesWithinTheLimitsAreDroppedAndCounted) {
+  // Three 25 ms spikes of 10 g (within imu_max_acc) in a 4 s sequence: the spike gate drops
+  // them, the run goes on as if those samples were missing; with the gate off they are
+  // integrated and cost the trajectory.
+  const SceneRun clean = runScene(Mode::kBaseline, 4.0);
+  const auto spike = [](std::vector<ImuSample>& imu) {
+    for (std::size_t start : {250u, 420u, 610u})
+      for (std::size_t k = start; k < start + 5; ++k) imu[k].acc_b.x() += 100.0;
+  };
+  const SceneRun gated = runScene(Mode::kBaseline, 4.0, {}, spike);
+  const SceneRun ungated = runScene(Mode::kBaseline, 4.0, {}, spike, false, {},
+                                    [](Config& c) { c.imu_spike.max_ms = 0; });
+  EXPECT_EQ(clean.result.summary.imu_spikes, 0u);
+  EXPECT_EQ(gated.result.summary.imu_spikes, 3u);
+  EXPECT_EQ(gated.result.summary.imu_spike_samples, 15u);
+  EXPECT_EQ(gated.result.summary.imu_out_of_range, 0u);
+  EXPECT_EQ(ungated.result.summary.imu_spikes, 0u);
+  for (const auto& r : gated.result.summary.resets) ADD_FAILURE() << "reset at frame " << r.frame << ": " << r.why;
+  EXPECT_EQ(gated.result.trajectory.size(), clean.result.trajectory.size());
+  EXPECT_LT(ate(gated), 1.5 * ate(clean) + 0.005) << "clean " << ate(clean);
+  EXPECT_GT(ate(ungated), 3 * ate(gated)) << "gated " << ate(gated);
+}
+
 TEST(PipelineSystem, FramesBetweenImuSamplesAreReachedByInterpolation) {
   // No IMU sample at any frame's stamp (an IMU not synchronized with the cameras): each
   // frame waits for the next sample and is integrated to by interpolation, no reset.

@@ -208,6 +208,10 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
     std::printf("warning: IMU samples dropped: %zu not finite or beyond imu_max_acc / imu_max_gyr, %zu not after "
                 "the previous sample's time\n",
                 dropped["out_of_range"].get<std::size_t>(), dropped["out_of_order"].get<std::size_t>());
+  if (dropped["spikes"].get<std::size_t>() > 0)
+    std::printf("warning: %zu IMU spikes dropped (%zu samples beyond imu_spike_acc / imu_spike_gyr of the recent ones, "
+                "back within imu_spike_max_ms)\n",
+                s["imu_spikes"].get<std::size_t>(), dropped["spikes"].get<std::size_t>());
   if (const auto& u = s["unpaired_images"]; u["cam0"].get<std::size_t>() + u["cam1"].get<std::size_t>() > 0)
     std::printf("warning: stereo images without a partner within 1 ms, not processed: %zu left (cam0), %zu right "
                 "(cam1)\n",

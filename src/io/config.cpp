@@ -328,6 +328,7 @@ void declareImuParams(ParamVisitor& v, Config& c) {
           c.imu_max_acc_mps2);
   v.param({"imu_max_gyr", "rad/s, angular rate norm above which a sample is dropped (counted)", ParamRule::kPositive},
           c.imu_max_gyr_radps);
+  c.imu_spike.visit(v);
 }
 
 /// The mode, visited as its name.

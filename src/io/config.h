@@ -15,6 +15,7 @@
 #include "core/measurements.h"
 #include "dynamic/idy_options.h"
 #include "frontend/tracker_params.h"
+#include "imu/spike_gate.h"
 
 namespace idyvins {
 
@@ -43,6 +44,7 @@ struct Config {
   /// a robot must live through a few impossible samples. Defaults: 16 g, 35 rad/s.
   double imu_max_acc_mps2 = 16 * 9.80665;
   double imu_max_gyr_radps = 35.0;
+  imu::SpikeGateOptions imu_spike;   ///< short spikes within those limits, dropped (imu/spike_gate.h)
   Mode mode = Mode::kIdy;            ///< `mode`; what it switches on: pipeline/modes.h
   frontend::TrackerParams tracker;   ///< feature tracker keys
   backend::EstimatorOptions estimator;  ///< solver, time offset and measurement-model keys

@@ -96,7 +96,8 @@ System::System(const Config& config, const RunOptions& run)
       mode_(config.mode),
       run_(run),
       front_end_(config_),
-      estimator_(config_.rig(), config_.imu, optionsFor(config_).estimator) {
+      estimator_(config_.rig(), config_.imu, optionsFor(config_).estimator),
+      spike_gate_(config_.imu_spike) {
   if (run_.feedback_delay != 0 && run_.feedback_delay != 1)
     throw std::invalid_argument("RunOptions::feedback_delay must be 0 or 1");
   if (run_.pipelined && run_.feedback_delay != 1)
@@ -134,7 +135,7 @@ void System::loadMap(const map::SavedMap& m, bool extend, const std::string& sou
 }
 
 void System::addImu(const ImuSample& sample) {
-  if (!imu_.empty() && sample.t_ns <= imu_.back().t_ns) {  // as the estimator: strictly increasing
+  if (any_imu_ && sample.t_ns <= last_imu_t_ns_) {  // as the estimator: strictly increasing
     ++summary_.imu_out_of_order;
     return;
   }
@@ -143,7 +144,11 @@ void System::addImu(const ImuSample& sample) {
     ++summary_.imu_out_of_range;
     return;
   }
-  imu_.push_back(sample);
+  any_imu_ = true;
+  last_imu_t_ns_ = sample.t_ns;
+  spike_gate_.push(sample, imu_);  // short spikes held back, then dropped
+  summary_.imu_spikes = spike_gate_.spikes();
+  summary_.imu_spike_samples = spike_gate_.droppedSamples();
 }
 
 frontend::MotionPrior System::priorFor(TimeNs t_prev, TimeNs t_cur) const {
@@ -353,6 +358,7 @@ void System::account(FrameOutput& out) {
 }
 
 Result System::finish() {
+  spike_gate_.flush(imu_);  // the end of the stream: a run still held is released as it is
   // Frames whose time on the IMU clock is past the last IMU sample cannot be integrated to.
   for (; !pending_.empty(); pending_.pop_front()) {
     if (imuCovers(pending_.front()))

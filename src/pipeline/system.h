@@ -22,6 +22,7 @@
 #include "core/measurements.h"
 #include "dynamic/dynamic.h"
 #include "frontend/feature_frame.h"
+#include "imu/spike_gate.h"
 #include "io/config.h"
 #include "map/loop_closer.h"
 #include "pipeline/front_end.h"
@@ -78,6 +79,8 @@ struct Summary {
   /// IMU samples dropped by addImu: not finite or beyond imu_max_acc / imu_max_gyr, and
   /// stamped at or before the previous sample.
   std::size_t imu_out_of_range = 0, imu_out_of_order = 0;
+  /// Short spikes within those limits dropped by the spike gate (imu/spike_gate.h): runs, samples.
+  std::size_t imu_spikes = 0, imu_spike_samples = 0;
   double td_s = 0;            ///< camera–IMU time offset at the end (the config's td unless estimated)
   bool td_estimated = false;  ///< the config's estimate_td
   TimeNs first_t_ns = 0, last_t_ns = 0;  ///< time stamps of the first and last frame
@@ -143,6 +146,10 @@ class System {
   /// Observers are called in the order added, for every frame in order, on the calling
   /// thread, once the frame's back end has finished; not owned.
   void addObserver(FrameObserver& observer) { observers_.push_back(&observer); }
+  /// Takes the next IMU sample. Dropped and counted (Summary): a sample not after the previous
+  /// one, not finite or beyond imu_max_acc / imu_max_gyr, and the samples of a short spike
+  /// (imu/spike_gate.h: a possible spike is held back up to imu_spike_max_ms, so a frame may
+  /// wait that much longer for its IMU).
   void addImu(const ImuSample& sample);
   /// Processes one stereo frame (after the IMU samples up to its time stamp). The frame's
   /// time on the IMU clock is its stamp + td (the config's, or the current estimate with
@@ -213,6 +220,9 @@ class System {
   std::unique_ptr<InFlight> in_flight_;  ///< feedback_delay 1: the frame whose back end is pending
   std::unique_ptr<InFlight> done_;       ///< the frame last finalized (what addFrame returns)
   std::unique_ptr<Worker> worker_;       ///< pipelined: the back-end thread
+  imu::SpikeGate spike_gate_;            ///< holds back a possible spike until it is decided
+  bool any_imu_ = false;                 ///< a sample was accepted (in range, in order)
+  TimeNs last_imu_t_ns_ = 0;             ///< the newest accepted sample's time (held or in imu_)
   std::vector<ImuSample> imu_;           ///< samples not yet handed to the estimator, and those the prior needs
   std::size_t imu_to_estimator_ = 0;     ///< imu_[i] for i < this went to the estimator already
   backend::LatestState snapshot_;        ///< the estimator's newest state after the last finalized frame
