@@ -119,7 +119,11 @@ void Driver::process() {
     }
     try {
       if (const auto* imu = std::get_if<ImuSample>(&m)) {
+        const std::size_t spikes = system_.summary().imu_spikes;
         system_.addImu(*imu);
+        if (system_.summary().imu_spikes > spikes)
+          ROS_WARN_THROTTLE(5, "idyvins: IMU spike dropped (%zu so far, %zu samples; imu_spike_acc / imu_spike_gyr)",
+                            system_.summary().imu_spikes, system_.summary().imu_spike_samples);
         system_.poll();
       } else {
         system_.addFrame(std::get<StereoFrame>(m));
