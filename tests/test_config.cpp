@@ -447,6 +447,21 @@ TEST(Config, EstimatedAnchorRaysNeedAFixedTimeOffset) {
               "estimate_anchor_ray has no time-offset form: set estimate_td 0 with it");
 }
 
+TEST(Config, ImuSpikesMustBeShorterThanTheLargestImuGap) {
+  TempDir dir;
+  const Config c = loadConfig(writeConfig(dir, std::string(kConfig) + "imu_spike_acc: 80\nimu_spike_max_ms: 30\n", kCamera));
+  EXPECT_DOUBLE_EQ(c.imu_spike.acc_mps2, 80.0);
+  EXPECT_DOUBLE_EQ(c.imu_spike.max_ms, 30.0);
+  EXPECT_DOUBLE_EQ(loadConfig(writeConfig(dir, kConfig, kCamera)).imu_spike.max_ms, 50.0);
+  EXPECT_DOUBLE_EQ(loadConfig(writeConfig(dir, std::string(kConfig) + "imu_spike_max_ms: 0\n", kCamera)).imu_spike.max_ms, 0.0);
+  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "imu_spike_max_ms: 150\n", kCamera)); },
+              "imu_spike_max_ms (150) must be below max_imu_gap (100 ms): a dropped spike leaves a gap to bridge");
+  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "max_imu_gap: 0.04\n", kCamera)); },
+              "imu_spike_max_ms (50) must be below max_imu_gap (40 ms)");
+  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "imu_spike_gyr: -1\n", kCamera)); },
+              "key 'imu_spike_gyr': expected");
+}
+
 TEST(Config, TrackDropoutIsAShareOfAThousand) {
   TempDir dir;
   const Config c = loadConfig(writeConfig(dir, std::string(kConfig) + "track_dropout_permille: 20\ntrack_dropout_seed: 3\n", kCamera));

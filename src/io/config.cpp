@@ -361,6 +361,13 @@ void declareAll(ParamVisitor& v, Config& c, std::string& mode_name) {
 }
 
 /// Checks between keys, after they are read.
+/// A number as a config file would write it ("50", "0.1").
+std::string shortNumber(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+
 void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
   if (!parseMode(mode_name, c.mode))
     throw InputError(f.path, lineOf(f.root["mode"]),
@@ -372,6 +379,12 @@ void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
     throw InputError(f.path, lineOf(f.root["track_dropout_permille"]),
                      "key 'track_dropout_permille': expected 0 to 1000, got " +
                          std::to_string(c.tracker.track_dropout_permille));
+  if (c.imu_spike.max_ms >= 1e3 * c.estimator.max_imu_gap_s) {  // a dropped spike leaves a gap to bridge
+    const YAML::Node at = f.root["imu_spike_max_ms"] ? f.root["imu_spike_max_ms"] : f.root["max_imu_gap"];
+    throw InputError(f.path, lineOf(at),
+                     "imu_spike_max_ms (" + shortNumber(c.imu_spike.max_ms) + ") must be below max_imu_gap (" +
+                         shortNumber(1e3 * c.estimator.max_imu_gap_s) + " ms): a dropped spike leaves a gap to bridge");
+  }
   if (c.estimator.estimate_anchor_ray && c.estimator.estimate_td)
     throw InputError(f.path, lineOf(f.root["estimate_anchor_ray"]),
                      "estimate_anchor_ray has no time-offset form: set estimate_td 0 with it");
