@@ -76,6 +76,17 @@ TEST(SpikeGate, KeepsAChangeThatLastsLongerThanASpike) {
   EXPECT_EQ(times(out), times(in));
 }
 
+TEST(SpikeGate, ARunThatComesBackOnlyAfterMaxMsIsKept) {
+  // Four samples 10 g off, then the stream pauses 80 ms: when the next (ordinary) sample
+  // comes, the run has lasted longer than a spike, so it is released, not dropped.
+  std::vector<ImuSample> in = vibrating(300);
+  for (std::size_t k = 100; k < 104; ++k) in[k].acc_b.x() += 100.0;
+  for (std::size_t k = 104; k < in.size(); ++k) in[k].t_ns += 80'000'000;
+  SpikeGate gate;
+  EXPECT_EQ(times(passAll(gate, in)), times(in));
+  EXPECT_EQ(gate.spikes(), 0u);
+}
+
 TEST(SpikeGate, PassesRealEurocSamplesUntouchedAndFindsASpikeAddedToThem) {
   // A real MAV in flight (vibration included): nothing is taken for a spike.
   for (const char* file : {"euroc_v101_micro/mav0/imu0/data.csv", "euroc_imu_gt_excerpt/mav0/imu0/data.csv"}) {

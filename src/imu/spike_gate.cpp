@@ -43,24 +43,22 @@ void SpikeGate::push(const ImuSample& s, std::vector<ImuSample>& released) {
     return;
   }
   const TimeNs max_ns = static_cast<TimeNs>(options_.max_ms * 1e6);
+  if (!held_.empty() && s.t_ns - held_.front().t_ns > max_ns) {  // the run outlasted a spike: a real change
+    for (const ImuSample& h : held_) release(h, released);      // what follows is compared with the new level
+    held_.clear();
+  }
   // After a gap longer than a spike the recent samples say nothing about this one.
   if (held_.empty() && !recent_.empty() && s.t_ns - recent_.back().t_ns > max_ns) recent_.clear();
-  if (!deviates(s)) {
-    if (!held_.empty()) {  // the run came back in time: a spike
-      ++spikes_;
-      dropped_samples_ += held_.size();
-      held_.clear();
-    }
-    release(s, released);
+  if (deviates(s)) {
+    held_.push_back(s);
     return;
   }
-  if (!held_.empty() && s.t_ns - held_.front().t_ns > max_ns) {  // too long for a spike: real
-    for (const ImuSample& h : held_) release(h, released);  // what follows is compared with the new level
+  if (!held_.empty()) {  // the run came back in time: a spike
+    ++spikes_;
+    dropped_samples_ += held_.size();
     held_.clear();
-    release(s, released);
-    return;
   }
-  held_.push_back(s);
+  release(s, released);
 }
 
 void SpikeGate::flush(std::vector<ImuSample>& released) {

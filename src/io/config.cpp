@@ -360,7 +360,6 @@ void declareAll(ParamVisitor& v, Config& c, std::string& mode_name) {
   declareTopicParams(v, c);
 }
 
-/// Checks between keys, after they are read.
 /// A number as a config file would write it ("50", "0.1").
 std::string shortNumber(double v) {
   std::ostringstream o;
@@ -368,6 +367,7 @@ std::string shortNumber(double v) {
   return o.str();
 }
 
+/// Checks between keys, after they are read.
 void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
   if (!parseMode(mode_name, c.mode))
     throw InputError(f.path, lineOf(f.root["mode"]),
