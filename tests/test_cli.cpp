@@ -78,7 +78,20 @@ TEST(Cli, InfoOnRealEurocExcerpt) {
   EXPECT_NE(r.out.find("stereo pairs     95 frames"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("cam0 0, cam1 4 rows without a partner"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("95 pairs read, all 752x480"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("imu spikes   none that run would drop"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("valid: yes"), std::string::npos) << r.out;
+}
+
+TEST(Cli, InfoCountsTheImuSpikesRunWouldDrop) {
+  // 25 ms of 10 g added to the real excerpt's IMU at 2 s: info names the spike run drops.
+  idyvins::test::TempDir dir;
+  const Result p = run("perturb " + kMicro + " " + (dir / "spiked") + " --fault imu-spike --at 2 --count 5 --magnitude 100");
+  ASSERT_EQ(p.code, 0) << p.out;
+  const Result r = run("info " + (dir / "spiked") + " --skip-images");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("imu spikes   1 short spikes (5 samples) that run drops"), std::string::npos) << r.out;
+  const Result j = run("info " + (dir / "spiked") + " --skip-images --json");
+  EXPECT_NE(j.out.find("\"runs\": 1"), std::string::npos) << j.out;
 }
 
 TEST(Cli, InfoJson) {

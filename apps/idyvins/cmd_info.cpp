@@ -12,6 +12,7 @@
 #include "io/config.h"
 #include "io/dataset_summary.h"
 #include "io/euroc_dataset.h"
+#include "imu/spike_gate.h"
 #include "progress.h"
 
 namespace idyvins::app {
@@ -91,6 +92,20 @@ io::BagTopics defaultBagTopics(const std::optional<Config>& config, const std::s
   return t;
 }
 
+/// The short IMU spikes `run` would drop (imu/spike_gate.h, the config's keys or the defaults).
+struct SpikeCount {
+  std::size_t runs = 0, samples = 0;
+};
+
+SpikeCount imuSpikes(const std::vector<ImuSample>& imu, const imu::SpikeGateOptions& options) {
+  imu::SpikeGate gate(options);
+  std::vector<ImuSample> released;
+  released.reserve(imu.size());
+  for (const ImuSample& sample : imu) gate.push(sample, released);
+  gate.flush(released);
+  return {gate.spikes(), gate.droppedSamples()};
+}
+
 /// What info found, for printing.
 struct InfoOutcome {
   const io::EurocDataset& ds;
@@ -98,6 +113,7 @@ struct InfoOutcome {
   const io::BagIndex* bag;  ///< null for a EuRoC folder
   const Config* config;     ///< null without --config
   std::pair<int, int> size;  ///< image size (0 x 0 with --skip-images)
+  SpikeCount spikes;         ///< IMU spikes the spike gate would drop
 };
 
 void printJson(const InfoArgs& args, const InfoOutcome& o) {
@@ -112,6 +128,7 @@ void printJson(const InfoArgs& args, const InfoOutcome& o) {
                       {"unmatched_cam1", s.unmatched1},
                       {"unmatched_without_image", s.unmatched_missing_image},
                       {"groundtruth", s.has_groundtruth ? toJson(s.groundtruth) : nullptr},
+                      {"imu_spikes", {{"runs", o.spikes.runs}, {"samples", o.spikes.samples}}},
                       {"images_checked", !args.skip_images},
                       {"image_width", o.size.first},
                       {"image_height", o.size.second},
@@ -153,6 +170,11 @@ void printText(const InfoArgs& args, const InfoOutcome& o) {
               s.imu_before_first_frame_s, s.imu_after_last_frame_s);
   if (s.imu_before_first_frame_s < 0 || s.imu_after_last_frame_s < 0)
     std::printf("  warning: IMU does not cover every frame\n");
+  if (o.spikes.runs > 0)
+    std::printf("  imu spikes   %zu short spikes (%zu samples) that run drops (imu_spike_acc / imu_spike_gyr)\n",
+                o.spikes.runs, o.spikes.samples);
+  else
+    std::printf("  imu spikes   none that run would drop\n");
   if (!args.skip_images)
     std::printf("  images       %zu pairs read, all %dx%d 8-bit gray\n", o.ds.pairs.size(),
                 o.size.first, o.size.second);
@@ -177,7 +199,8 @@ int runInfo(const InfoArgs& args) {
   if (!args.skip_images)
     size = bag ? validateBagImages(*bag, config ? config->image_width : 0, config ? config->image_height : 0)
                : validateImages(ds, config ? config->image_width : 0, config ? config->image_height : 0);
-  const InfoOutcome outcome{ds, s, bag ? &*bag : nullptr, config ? &*config : nullptr, size};
+  const SpikeCount spikes = imuSpikes(ds.imu, config ? config->imu_spike : imu::SpikeGateOptions{});
+  const InfoOutcome outcome{ds, s, bag ? &*bag : nullptr, config ? &*config : nullptr, size, spikes};
   if (args.json)
     printJson(args, outcome);
   else
