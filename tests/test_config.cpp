@@ -237,6 +237,11 @@ const char* kConfig =
     "max_solver_time: 0.04\nmax_num_iterations: 8\nkeyframe_parallax: 10.0\n"
     "mode: ransac\nlambda_dy: 5\n";
 
+/// Loads kConfig with `extra_keys` appended (and kCamera) from `dir`.
+Config loadWith(const TempDir& dir, const std::string& extra_keys) {
+  return loadConfig(writeConfig(dir, std::string(kConfig) + extra_keys, kCamera));
+}
+
 std::string replace(std::string s, const std::string& from, const std::string& to) {
   const auto pos = s.find(from);
   EXPECT_NE(pos, std::string::npos) << from;
@@ -252,15 +257,15 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
   EXPECT_EQ(c.mode, Mode::kRansac);
   EXPECT_DOUBLE_EQ(c.idy.lambda_dy, 5.0);
   EXPECT_TRUE(c.idy.confirm_outliers);  // default
-  EXPECT_FALSE(loadConfig(writeConfig(dir, std::string(kConfig) + "confirm_outliers_dynamic: 0\n", kCamera))
+  EXPECT_FALSE(loadWith(dir, "confirm_outliers_dynamic: 0\n")
                    .idy.confirm_outliers);
   EXPECT_TRUE(c.idy.lost_track_test);  // default
-  EXPECT_FALSE(loadConfig(writeConfig(dir, std::string(kConfig) + "lost_track_test: 0\n", kCamera))
+  EXPECT_FALSE(loadWith(dir, "lost_track_test: 0\n")
                    .idy.lost_track_test);
-  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "lost_track_test: yes\n", kCamera)); },
+  expectError([&] { loadWith(dir, "lost_track_test: yes\n"); },
               "lost_track_test");
   EXPECT_TRUE(c.idy.follow_eliminated);  // default
-  EXPECT_FALSE(loadConfig(writeConfig(dir, std::string(kConfig) + "follow_eliminated: 0\n", kCamera))
+  EXPECT_FALSE(loadWith(dir, "follow_eliminated: 0\n")
                    .idy.follow_eliminated);
   EXPECT_FALSE(c.estimator.estimate_td);
   EXPECT_DOUBLE_EQ(c.estimator.td_s, 0.0);
@@ -297,19 +302,19 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
   EXPECT_DOUBLE_EQ(s.idy.stereo.remove_chi2, 0.0);
   EXPECT_EQ(s.idy.stereo.persistent_strikes, 0);
   expectError(
-      [&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_persistent_strikes: -1\n", kCamera)); },
+      [&] { loadWith(dir, "stereo_motion_persistent_strikes: -1\n"); },
       "stereo_motion_persistent_strikes");
-  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_remove_chi2: -1\n", kCamera)); },
+  expectError([&] { loadWith(dir, "stereo_motion_remove_chi2: -1\n"); },
               "stereo_motion_remove_chi2");
-  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_noise_ref: -1\n", kCamera)); },
+  expectError([&] { loadWith(dir, "stereo_motion_noise_ref: -1\n"); },
               "stereo_motion_noise_ref");
   expectError(
-      [&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_noise_quantile: 1\n", kCamera)); },
+      [&] { loadWith(dir, "stereo_motion_noise_quantile: 1\n"); },
       "stereo_motion_noise_quantile");
   expectError(
-      [&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_min_disparity_px: -2\n", kCamera)); },
+      [&] { loadWith(dir, "stereo_motion_min_disparity_px: -2\n"); },
       "stereo_motion_min_disparity_px");
-  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_motion_sigma_px: 0\n", kCamera)); },
+  expectError([&] { loadWith(dir, "stereo_motion_sigma_px: 0\n"); },
               "stereo_motion_sigma_px");
 }
 
@@ -320,13 +325,13 @@ TEST(Config, SolverTimeLimitIsOffUnlessAskedFor) {
   EXPECT_DOUBLE_EQ(c.estimator.max_solver_time_s, 0.04);  // read, kept for live use
   EXPECT_DOUBLE_EQ(c.estimator.function_tolerance, 1e-4);  // measured default (Ceres' own is 1e-6)
   EXPECT_DOUBLE_EQ(
-      loadConfig(writeConfig(dir, std::string(kConfig) + "solver_function_tolerance: 1e-6\n", kCamera))
+      loadWith(dir, "solver_function_tolerance: 1e-6\n")
           .estimator.function_tolerance,
       1e-6);
-  const Config live = loadConfig(writeConfig(dir, std::string(kConfig) + "solver_time_limit: 1\n", kCamera));
+  const Config live = loadWith(dir, "solver_time_limit: 1\n");
   EXPECT_TRUE(live.estimator.time_limited);
   EXPECT_NE(describe(live).find("applied"), std::string::npos);
-  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "solver_time_limit: yes\n", kCamera)); },
+  expectError([&] { loadWith(dir, "solver_time_limit: yes\n"); },
               "solver_time_limit");
 }
 
@@ -390,11 +395,11 @@ TEST(Config, TrackerImageKeys) {
   EXPECT_FALSE(set.tracker.stereo_gain_compensation);
   EXPECT_DOUBLE_EQ(set.tracker.stereo_epipolar_px, 1.0);
   EXPECT_TRUE(set.tracker.stereo_refine);
-  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_refine: yes\n", kCamera)); },
+  expectError([&] { loadWith(dir, "stereo_refine: yes\n"); },
               "stereo_refine");
-  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "stereo_epipolar_px: 0\n", kCamera)); },
+  expectError([&] { loadWith(dir, "stereo_epipolar_px: 0\n"); },
               "stereo_epipolar_px");
-  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "equalize: clahe\n", kCamera)); },
+  expectError([&] { loadWith(dir, "equalize: clahe\n"); },
               "equalize");
   const Config euroc = loadConfig(std::string(IDYVINS_SOURCE_DIR) + "/config/euroc/euroc_stereo_imu_config.yaml");
   EXPECT_TRUE(euroc.tracker.equalize) << "measured on the real excerpt (test_frontend)";
@@ -439,7 +444,7 @@ TEST(Config, AKeyWrittenTwiceIsRefused) {
 
 TEST(Config, EstimatedAnchorRaysNeedAFixedTimeOffset) {
   TempDir dir;
-  const Config on = loadConfig(writeConfig(dir, std::string(kConfig) + "estimate_anchor_ray: 1\n", kCamera));
+  const Config on = loadWith(dir, "estimate_anchor_ray: 1\n");
   EXPECT_TRUE(on.estimator.estimate_anchor_ray);
   EXPECT_FALSE(loadConfig(writeConfig(dir, kConfig, kCamera)).estimator.estimate_anchor_ray);
   const std::string both = std::string(kConfig) + "estimate_td: 1\nestimate_anchor_ray: 1\n";
@@ -449,26 +454,26 @@ TEST(Config, EstimatedAnchorRaysNeedAFixedTimeOffset) {
 
 TEST(Config, ImuSpikesMustBeShorterThanTheLargestImuGap) {
   TempDir dir;
-  const Config c = loadConfig(writeConfig(dir, std::string(kConfig) + "imu_spike_acc: 80\nimu_spike_max_ms: 30\n", kCamera));
+  const Config c = loadWith(dir, "imu_spike_acc: 80\nimu_spike_max_ms: 30\n");
   EXPECT_DOUBLE_EQ(c.imu_spike.acc_mps2, 80.0);
   EXPECT_DOUBLE_EQ(c.imu_spike.max_ms, 30.0);
   EXPECT_DOUBLE_EQ(loadConfig(writeConfig(dir, kConfig, kCamera)).imu_spike.max_ms, 50.0);
-  EXPECT_DOUBLE_EQ(loadConfig(writeConfig(dir, std::string(kConfig) + "imu_spike_max_ms: 0\n", kCamera)).imu_spike.max_ms, 0.0);
-  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "imu_spike_max_ms: 150\n", kCamera)); },
+  EXPECT_DOUBLE_EQ(loadWith(dir, "imu_spike_max_ms: 0\n").imu_spike.max_ms, 0.0);
+  expectError([&] { loadWith(dir, "imu_spike_max_ms: 150\n"); },
               "imu_spike_max_ms (150) must be below max_imu_gap (100 ms): a dropped spike leaves a gap to bridge");
-  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "max_imu_gap: 0.04\n", kCamera)); },
+  expectError([&] { loadWith(dir, "max_imu_gap: 0.04\n"); },
               "imu_spike_max_ms (50) must be below max_imu_gap (40 ms)");
-  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "imu_spike_gyr: -1\n", kCamera)); },
+  expectError([&] { loadWith(dir, "imu_spike_gyr: -1\n"); },
               "key 'imu_spike_gyr': expected");
 }
 
 TEST(Config, TrackDropoutIsAShareOfAThousand) {
   TempDir dir;
-  const Config c = loadConfig(writeConfig(dir, std::string(kConfig) + "track_dropout_permille: 20\ntrack_dropout_seed: 3\n", kCamera));
+  const Config c = loadWith(dir, "track_dropout_permille: 20\ntrack_dropout_seed: 3\n");
   EXPECT_EQ(c.tracker.track_dropout_permille, 20);
   EXPECT_EQ(c.tracker.track_dropout_seed, 3);
   EXPECT_EQ(loadConfig(writeConfig(dir, kConfig, kCamera)).tracker.track_dropout_permille, 0);
-  expectError([&] { loadConfig(writeConfig(dir, std::string(kConfig) + "track_dropout_permille: 1001\n", kCamera)); },
+  expectError([&] { loadWith(dir, "track_dropout_permille: 1001\n"); },
               "key 'track_dropout_permille': expected 0 to 1000, got 1001");
 }
 

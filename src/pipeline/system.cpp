@@ -135,7 +135,7 @@ void System::loadMap(const map::SavedMap& m, bool extend, const std::string& sou
 }
 
 void System::addImu(const ImuSample& sample) {
-  if (any_imu_ && sample.t_ns <= last_imu_t_ns_) {  // as the estimator: strictly increasing
+  if (last_imu_t_ns_ && sample.t_ns <= *last_imu_t_ns_) {  // as the estimator: strictly increasing
     ++summary_.imu_out_of_order;
     return;
   }
@@ -144,7 +144,6 @@ void System::addImu(const ImuSample& sample) {
     ++summary_.imu_out_of_range;
     return;
   }
-  any_imu_ = true;
   last_imu_t_ns_ = sample.t_ns;
   spike_gate_.push(sample, imu_);  // short spikes held back, then dropped
   summary_.imu_spikes = spike_gate_.spikes();

@@ -221,8 +221,7 @@ class System {
   std::unique_ptr<InFlight> done_;       ///< the frame last finalized (what addFrame returns)
   std::unique_ptr<Worker> worker_;       ///< pipelined: the back-end thread
   imu::SpikeGate spike_gate_;            ///< holds back a possible spike until it is decided
-  bool any_imu_ = false;                 ///< a sample was accepted (in range, in order)
-  TimeNs last_imu_t_ns_ = 0;             ///< the newest accepted sample's time (held or in imu_)
+  std::optional<TimeNs> last_imu_t_ns_;  ///< the newest accepted sample's time (held or in imu_); none yet
   std::vector<ImuSample> imu_;           ///< samples not yet handed to the estimator, and those the prior needs
   std::size_t imu_to_estimator_ = 0;     ///< imu_[i] for i < this went to the estimator already
   backend::LatestState snapshot_;        ///< the estimator's newest state after the last finalized frame
