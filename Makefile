@@ -2,23 +2,25 @@
 BUILD ?= build
 JOBS  ?= 2
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release -DIDYVINS_WERROR=ON
+# Each step's seconds go to $IDYVINS_TIMES when it is set (.ci/run's table).
+TIMED = $(CURDIR)/scripts/timed.sh
 
 .PHONY: all setup build demo test sanitize bench fuzz clean
 
 all: build
 
 setup:
-	./scripts/setup.sh
+	$(TIMED) "setup (scripts/setup.sh)" ./scripts/setup.sh
 
 build: setup
-	cmake -S . -B $(BUILD) $(CMAKE_FLAGS)
-	cmake --build $(BUILD) -j$(JOBS)
+	$(TIMED) "configure" cmake -S . -B $(BUILD) $(CMAKE_FLAGS)
+	$(TIMED) "build (Release)" cmake --build $(BUILD) -j$(JOBS)
 
 demo: build
-	./scripts/demo.sh $(BUILD)
+	$(TIMED) "demo (scripts/demo.sh)" ./scripts/demo.sh $(BUILD)
 
 test: build
-	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
+	cd $(BUILD) && $(TIMED) "tests (ctest -j$(JOBS))" ctest --output-on-failure -j$(JOBS)
 
 sanitize: setup
 	./scripts/sanitize.sh $(BUILD)-asan

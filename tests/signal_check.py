@@ -20,7 +20,8 @@ import sys
 import time
 
 FILES = {"trajectory.tum", "trajectory.csv", "state.csv", "stats.json", "resets.csv", "map_static.ply",
-         "map_dynamic.ply", "map_all.ply", "run.json", "groundtruth.tum", "map_static_on_moving.ply"}
+         "map_dynamic.ply", "map_all.ply", "run.json", "groundtruth.tum", "map_static_on_moving.ply",
+         "idyvins_manifest.json"}
 failures = []
 
 

@@ -18,27 +18,13 @@
 #include <nlohmann/json.hpp>
 
 #include "pipeline/observers.h"
+#include "cli_util.h"
 #include "test_util.h"
 
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string out;  ///< stdout and stderr
-};
-
-Result run(const std::string& args) {
-  const std::string cmd = std::string(IDYVINS_BINARY) + " " + args + " 2>&1";
-  Result r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf{};
-  std::size_t n = 0;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using Result = idyvins::test::CliResult;
+Result run(const std::string& args) { return idyvins::test::runCli(args); }
 
 const std::string kMicro = idyvins::test::sharedData("euroc_v101_micro");
 
@@ -122,7 +108,7 @@ TEST(Cli, SimulateBadArguments) {
   EXPECT_NE(level.out.find("extreme"), std::string::npos) << level.out;
   const Result out = run("simulate --duration 0.1 --out /proc/forbidden/sim");
   EXPECT_EQ(out.code, 1);
-  EXPECT_EQ(out.out.find("error: /proc/forbidden/sim/mav0/cam0/data: cannot create folder"), 0u) << out.out;
+  EXPECT_EQ(out.out.find("error: /proc/forbidden/sim: cannot create the output folder"), 0u) << out.out;
   EXPECT_EQ(std::count(out.out.begin(), out.out.end(), '\n'), 1) << out.out;
 }
 

@@ -113,6 +113,7 @@ class MoveAwayFromDefaults final : public ParamVisitor {
       case ParamRule::kCorrelation: v = v == 0.3 ? 0.4 : 0.3; break;
       case ParamRule::kImuNoise: v = v == 0.5 ? 0.7 : 0.5; break;
       case ParamRule::kGravity: v = v == 9.8 ? 9.79 : 9.8; break;
+      case ParamRule::kTimeOffset: v = v == 0.01 ? 0.02 : 0.01; break;
       default: v += 1.5;
     }
   }
@@ -372,7 +373,9 @@ TEST(Config, WrongMatrixSizeNamesTheLine) {
 TEST(Config, NonRigidTransformRefused) {
   TempDir dir;
   const auto path = writeConfig(dir, replace(kConfig, "[1, 0, 0, 0.1", "[2, 0, 0, 0.1"), kCamera);
-  expectError([&] { loadConfig(path); }, "expected a rigid transform");
+  expectError([&] { loadConfig(path); }, "rotation block not orthonormal (|R R^T - I| = 3, expected below 1e-6");
+  const auto flipped = writeConfig(dir, replace(kConfig, "[1, 0, 0, 0.1", "[-1, 0, 0, 0.1"), kCamera);
+  expectError([&] { loadConfig(flipped); }, "expected a rigid transform");  // det -1: a reflection
 }
 
 TEST(Config, UnknownCameraModel) {

@@ -19,6 +19,7 @@
 #include "bench_page.h"
 #include "bench_sweep.h"
 #include "commands.h"
+#include "io/output_folder.h"
 #include "core/build_info.h"
 #include "core/error.h"
 #include "io/config.h"
@@ -35,6 +36,7 @@ struct BenchArgs {
   double duration = 60.0;
   bool ablations = false;
   bool reuse_runs = false;
+  bool force = false;  ///< --force: an --out holding other files (none is removed)
   std::string plan;                  ///< --plan FILE: write the jobs, run none
   std::vector<std::string> collect;  ///< --collect DIR...: tables from finished job folders
   int jobs = 2;
@@ -430,6 +432,25 @@ Sweep planSweep(const BenchArgs& a, const std::string& exe, const fs::path& out)
   return sw;
 }
 
+/// --out: new, empty or an earlier bench's (its bench.json there); bench never removes a file, but a
+/// folder of other files is refused (its tables, runs/ and data/ would land among them).
+void checkBenchFolder(const BenchArgs& a) {
+  io::OutputFolderOptions o;
+  o.tool = "bench";
+  o.inputs = {a.config};
+  if (a.suite == "viode") o.inputs.push_back(a.data);
+  io::checkApartFromInputs(a.out, o.inputs);
+  std::error_code ec;
+  if (fs::exists(a.out, ec) && !fs::is_directory(a.out, ec)) throw InputError(a.out, "exists and is not a folder");
+  if (a.force || !fs::is_directory(a.out, ec) || fs::exists(fs::path(a.out) / "bench.json", ec)) return;
+  bool has_files = false;  // the empty runs/ and data/ a refused bench leaves count as empty
+  for (fs::recursive_directory_iterator it(a.out, ec), end; !ec && it != end && !has_files; it.increment(ec))
+    has_files = !it->is_directory(ec);
+  if (has_files)
+    throw InputError(a.out, "holds files of no earlier idyvins bench (no bench.json): name a new or empty folder, or "
+                            "pass --force to write beside them (none is removed)");
+}
+
 int runBench(const BenchArgs& a) {
   if (a.suite != "standard" && a.suite != "validation" && a.suite != "viode")
     throw CLI::ValidationError("--suite", "expected standard, validation or viode, got '" + a.suite + "'");
@@ -439,6 +460,7 @@ int runBench(const BenchArgs& a) {
   if (!a.modes.empty()) parseModes(a.modes);
   const std::string exe = self();
   const fs::path out = fs::absolute(a.out);
+  checkBenchFolder(a);
   const Sweep sweep = planSweep(a, exe, out);
   writeSweep(out, sweep);
   if (!a.plan.empty()) {
@@ -495,7 +517,10 @@ void registerBench(CLI::App& app, int& exit_code) {
   cmd->add_option("--config", a->config,
                   "viode: the config (its folder is copied per environment with that environment's vehicle\n"
                   "table; default: the source tree's config/viode/viode_stereo_imu_config.yaml)");
-  cmd->add_option("-o,--out", a->out, "output folder (required, except with --collect)");
+  cmd->add_option("-o,--out", a->out,
+                  "output folder (required, except with --collect): new, empty or an earlier bench's; one holding\n"
+                  "other files is refused");
+  cmd->add_flag("--force", a->force, "write into an --out holding files bench did not write (none is removed)");
   cmd->add_option("--seeds", a->seeds, "comma-separated seeds (default 1)");
   cmd->add_option("--duration", a->duration, "seconds per sequence (default 60)");
   cmd->add_option("--realism", a->realism,

@@ -75,6 +75,10 @@ void printText(const EvalArgs& a, const EvalOutcome& o) {
   if (o.mode == eval::AlignMode::kSim3) std::printf(" (scale %.6f)", o.ate.alignment.s);
   std::printf(", path length %.3f m\n", o.path);
   const auto row = [](const char* name, const eval::ErrorStats& s) {
+    if (s.n == 0) {  // no numbers to show: zeros would read as a perfect result
+      std::printf("%-14s n      0  no pairs (the trajectory is shorter than this distance)\n", name);
+      return;
+    }
     std::printf("%-14s n %6zu  rmse %.6f  mean %.6f  median %.6f  std %.6f  min %.6f  max %.6f\n", name, s.n, s.rmse,
                 s.mean, s.median, s.std, s.min, s.max);
   };

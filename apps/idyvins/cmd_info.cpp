@@ -11,6 +11,7 @@
 #include "io/bag_dataset.h"
 #include "io/config.h"
 #include "io/dataset_summary.h"
+#include "pipeline/system.h"
 #include "io/euroc_dataset.h"
 #include "imu/spike_gate.h"
 #include "progress.h"
@@ -114,6 +115,7 @@ struct InfoOutcome {
   const Config* config;     ///< null without --config
   std::pair<int, int> size;  ///< image size (0 x 0 with --skip-images)
   SpikeCount spikes;         ///< IMU spikes the spike gate would drop
+  std::vector<std::string> warnings;  ///< what run would warn about (config keys, plausibility)
 };
 
 void printJson(const InfoArgs& args, const InfoOutcome& o) {
@@ -138,6 +140,7 @@ void printJson(const InfoArgs& args, const InfoOutcome& o) {
     j["topics"] = nlohmann::json::array();
     for (const auto& t : o.bag->all_topics) j["topics"].push_back({{"topic", t.topic}, {"type", t.type}, {"count", t.count}});
   }
+  j["warnings"] = o.warnings;
   std::cout << j.dump(2) << "\n";
 }
 
@@ -179,7 +182,8 @@ void printText(const InfoArgs& args, const InfoOutcome& o) {
     std::printf("  images       %zu pairs read, all %dx%d 8-bit gray\n", o.ds.pairs.size(),
                 o.size.first, o.size.second);
   if (o.config) std::printf("%s", describe(*o.config).c_str());
-  std::printf("valid: yes\n");
+  if (o.warnings.empty()) std::printf("valid: yes\n");
+  else std::printf("valid: yes, with %zu warning(s) (on stderr; run prints them too)\n", o.warnings.size());
 }
 
 int runInfo(const InfoArgs& args) {
@@ -193,14 +197,21 @@ int runInfo(const InfoArgs& args) {
   if (!bag) folder = io::readEurocDataset(args.dataset);
   const io::EurocDataset& ds = bag ? bag->dataset : folder;  // no copy of a long bag's index
   const io::DatasetSummary s = io::summarize(ds);
-  if (config && config->num_cam == 2 && !ds.stereo())
-    throw InputError(ds.root, "config asks for 2 cameras but the dataset has no cam1/");
   std::pair<int, int> size{0, 0};
   if (!args.skip_images)
     size = bag ? validateBagImages(*bag, config ? config->image_width : 0, config ? config->image_height : 0)
                : validateImages(ds, config ? config->image_width : 0, config ? config->image_height : 0);
+  // What run would refuse (thrown here) or warn about, in its words.
+  std::vector<std::string> warnings;
+  if (config) {
+    pipeline::checkRunnable(*config);
+    warnings = config->warnings;
+    const auto more = io::checkPlausible(ds, s, *config);
+    warnings.insert(warnings.end(), more.begin(), more.end());
+  }
+  for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   const SpikeCount spikes = imuSpikes(ds.imu, config ? config->imu_spike : imu::SpikeGateOptions{});
-  const InfoOutcome outcome{ds, s, bag ? &*bag : nullptr, config ? &*config : nullptr, size, spikes};
+  const InfoOutcome outcome{ds, s, bag ? &*bag : nullptr, config ? &*config : nullptr, size, spikes, warnings};
   if (args.json)
     printJson(args, outcome);
   else

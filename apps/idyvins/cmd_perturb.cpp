@@ -2,6 +2,7 @@
 // meets (sensor dropouts, time jumps, bad images, IMU spikes), to reproduce how idyvins handles
 // it. Unchanged files are hard links to the original's (no space, never written through).
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -15,6 +16,7 @@
 #include "commands.h"
 #include "core/error.h"
 #include "io/euroc_dataset.h"
+#include "io/output_folder.h"
 
 namespace idyvins::app {
 namespace {
@@ -27,7 +29,8 @@ const std::vector<std::string> kFaults = {"imu-gap", "silence",   "frame-drop", 
 
 struct PerturbArgs {
   std::string dataset, out, fault;
-  double at_s = 4.0, duration_s = 0.5, magnitude = 0;
+  double at_s = 4.0, duration_s = 0.5, magnitude = 0;  ///< checkedArgs: --magnitude or the fault's default
+  std::optional<double> magnitude_given;               ///< --magnitude
   int count = 1;
 };
 
@@ -96,7 +99,8 @@ void editImages(const fs::path& mav0, const std::function<bool(TimeNs)>& which,
     const fs::path dir = mav0 / ("cam" + std::to_string(cam));
     if (!fs::exists(dir / "data.csv")) continue;
     for (const auto& r : readCsv(dir / "data.csv").rows)
-      if (r.size() >= 2 && which(Csv::stamp(r))) edit(dir / "data" / r[1], cam);
+      if (r.size() >= 2 && which(Csv::stamp(r)) && fs::exists(dir / "data" / r[1]))  // EuRoC lists some absent images
+        edit(dir / "data" / r[1], cam);
   }
 }
 
@@ -128,7 +132,7 @@ void applyImageFault(const PerturbArgs& a, const fs::path& mav0, const std::func
       for (unsigned char ch : p.filename().string()) seed = (seed ^ ch) * 1099511628211ull;
       cv::RNG rng(seed);
       rng.fill(u, cv::RNG::UNIFORM, 0.0, 1.0);
-      const double share = (a.magnitude > 0 ? a.magnitude : 10.0) / 100.0;
+      const double share = a.magnitude / 100.0;
       noisy.setTo(cv::Scalar::all(0), u < share / 2);
       noisy.setTo(cv::Scalar::all(255), (u >= share / 2) & (u < share));
       replaceImage(p, noisy);
@@ -177,10 +181,43 @@ void applyFault(const PerturbArgs& a, const fs::path& mav0, TimeNs t0) {
     applyImageFault(a, mav0, in_window);
 }
 
-int runPerturb(const PerturbArgs& a) {
-  const io::EurocDataset ds = io::readEurocDataset(a.dataset);  // validated before anything is written
-  if (ds.cam0.empty()) throw InputError(a.dataset, "no cam0 images");
-  if (fs::exists(a.out)) throw InputError(a.out, "already exists; perturb writes a new folder");
+/// What --magnitude means for a fault, and its default: each default does something visible.
+struct Magnitude {
+  const char* fault;
+  double fallback;
+  const char* unit;
+};
+constexpr Magnitude kMagnitudes[] = {{"time-jump", 0.5, "s"}, {"desync", 5.0, "ms"}, {"imu-spike", 98.0, "m/s^2"},
+                                     {"salt", 10.0, "%"}};
+
+/// The arguments with the fault's magnitude filled in, checked against the dataset. Throws.
+PerturbArgs checkedArgs(PerturbArgs a, const io::EurocDataset& ds) {
+  const Magnitude* m = nullptr;
+  for (const Magnitude& k : kMagnitudes)
+    if (a.fault == k.fault) m = &k;
+  const bool given = a.magnitude_given.has_value();
+  if (!m && given) throw CLI::ValidationError("--magnitude", "fault " + a.fault + " has no magnitude");
+  if (m) a.magnitude = given ? *a.magnitude_given : m->fallback;
+  if (m && (!std::isfinite(a.magnitude) || a.magnitude == 0))
+    throw CLI::ValidationError("--magnitude", std::string("expected a finite, non-zero value (") + m->unit + ")");
+  if (m && a.fault == std::string("salt") && !(a.magnitude > 0 && a.magnitude <= 100))
+    throw CLI::ValidationError("--magnitude", "salt: expected a share of the pixels in (0, 100] %");
+  if (m && std::string(m->unit) == "s" && std::abs(a.magnitude) > 1e6)
+    throw CLI::ValidationError("--magnitude", "time-jump: expected at most 1e6 s");
+  if (!m) a.magnitude = 0;
+  const double span_s = 1e-9 * static_cast<double>(ds.cam0.back().t_ns - ds.cam0.front().t_ns);
+  if (a.at_s > span_s)
+    throw CLI::ValidationError("--at", "expected a time within the sequence (0 to " + std::to_string(span_s) +
+                                           " s from the first cam0 image), got " + std::to_string(a.at_s));
+  return a;
+}
+
+int runPerturb(const PerturbArgs& args) {
+  const io::EurocDataset ds = io::readEurocDataset(args.dataset);  // validated before anything is written
+  if (ds.cam0.empty()) throw InputError(args.dataset, "no cam0 images");
+  const PerturbArgs a = checkedArgs(args, ds);
+  io::checkApartFromInputs(a.out, {a.dataset});
+  if (fs::exists(fs::symlink_status(a.out))) throw InputError(a.out, "already exists; perturb writes a new folder");
   fs::copy(a.dataset, a.out, fs::copy_options::recursive | fs::copy_options::create_hard_links);
   const fs::path mav0 = fs::path(ds.root).filename() == "mav0" ? fs::path(a.out) / "mav0" : fs::path(a.out);
   applyFault(a, mav0, ds.cam0.front().t_ns);
@@ -212,7 +249,9 @@ void registerPerturb(CLI::App& app, int& exit_code) {
   cmd->add_option("--at", a->at_s, "s from the first cam0 image (default 4)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--duration", a->duration_s, "s (default 0.5)")->check(CLI::PositiveNumber);
   cmd->add_option("--count", a->count, "frames or samples (default 1)")->check(CLI::PositiveNumber);
-  cmd->add_option("--magnitude", a->magnitude, "time-jump: s; desync: ms; imu-spike: m/s^2");
+  cmd->add_option("--magnitude", a->magnitude_given,
+                  "time-jump: s (default 0.5); desync: ms (default 5); imu-spike: m/s^2 (default 98, 10 g);\n"
+                  "salt: % (default 10); finite and non-zero");
   cmd->callback([a, &exit_code] { exit_code = runPerturb(*a); });
 }
 

@@ -19,6 +19,7 @@
 #include "io/bag_dataset.h"
 #include "io/config.h"
 #include "io/data_source.h"
+#include "io/output_folder.h"
 #include "io/ply.h"
 #include "io/trajectory_io.h"
 #include "pipeline/observers.h"
@@ -34,7 +35,7 @@ struct RunArgs {
   std::string config, dataset, out, mode, dump_observations, groundtruth_topic, save_map, load_map;
   std::string command_line;  ///< as typed (run.json)
   std::size_t max_frames = 0;
-  bool solver_time_limit = false, localization_only = false;
+  bool solver_time_limit = false, localization_only = false, force = false;
   int threads = 2, feedback_delay = -1;
 };
 
@@ -54,83 +55,23 @@ class ProgressObserver final : public pipeline::FrameObserver {
 std::atomic<int> g_stop_signal{0};
 extern "C" void onStopSignal(int sig) { g_stop_signal = sig; }
 
-/// The output folder is written as a whole: into a fresh staging folder beside it, swapped
-/// in when complete, so an interrupted or killed run never leaves old and new files mixed.
-class StagedFolder {
- public:
-  explicit StagedFolder(const std::string& out) {
-    namespace fs = std::filesystem;
-    fs::path p(out);
-    if (p.filename().empty()) p = p.parent_path();  // "out/" -> "out"
-    final_ = p.string();
-    staging_ = final_ + ".partial-" + std::to_string(::getpid());
-    std::error_code ec;
-    if (fs::exists(final_) && !fs::is_directory(final_)) throw InputError(out, "exists and is not a folder");
-    if (p.has_parent_path()) fs::create_directories(p.parent_path(), ec);
-    fs::remove_all(staging_, ec);
-    if (!fs::create_directory(staging_, ec) || ec)
-      throw InputError(staging_, "cannot create output folder: " + (ec ? ec.message() : "exists"));
-  }
-  const std::string& path() const { return staging_; }
-  /// Where to write an extra output file named on the command line (`--dump-observations`):
-  /// inside the output folder it goes into the staging folder (published with it); elsewhere
-  /// its folder is created and the file opened once, so a path that cannot be written fails
-  /// before the run, not after it.
-  std::string extraFile(const std::string& path) const {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    const fs::path p(path);
-    if (p.filename().empty()) throw InputError(path, "expected a file name, got a folder");
-    if (insideOutput(p)) return (fs::path(staging_) / p.filename()).string();
-    if (p.has_parent_path()) fs::create_directories(p.parent_path(), ec);
-    const bool existed = fs::exists(p, ec);
-    if (!std::ofstream(path, std::ios::app)) throw InputError(path, "cannot write file");
-    if (!existed) fs::remove(p, ec);
-    return path;
-  }
-  /// The same for an extra output folder (`--save-map`): created now and a file written in it.
-  std::string extraFolder(const std::string& path) const {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    fs::path p(path);
-    if (p.filename().empty()) p = p.parent_path();  // "map/" -> "map"
-    if (isOutput(p)) throw InputError(path, "is the output folder (-o); name a folder beside it or inside it");
-    if (insideOutput(p)) return (fs::path(staging_) / p.filename()).string();
-    fs::create_directories(p, ec);
-    const fs::path probe = p / (".idyvins-write-check-" + std::to_string(::getpid()));
-    if (!std::ofstream(probe)) throw InputError(path, "cannot write into this folder");
-    fs::remove(probe, ec);
-    return p.string();
-  }
-  /// Replaces the old folder (if any) by the staging folder.
-  void publish() {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    const std::string old = final_ + ".old-" + std::to_string(::getpid());
-    const bool had_old = fs::exists(final_);
-    if (had_old) fs::rename(final_, old, ec);
-    if (!ec) fs::rename(staging_, final_, ec);
-    if (ec) throw InputError(final_, "cannot move the finished results into place: " + ec.message());
-    if (had_old) fs::remove_all(old, ec);
-    published_ = true;
-  }
-  StagedFolder(const StagedFolder&) = delete;
-  StagedFolder& operator=(const StagedFolder&) = delete;
-  ~StagedFolder() {  // a run that failed leaves no half-written staging folder behind
-    std::error_code ec;
-    if (!published_) std::filesystem::remove_all(staging_, ec);
-  }
+/// What a run writes (top-level names): a folder holding only these, run.json and stats.json among
+/// them, is an earlier run written before output folders carried a manifest.
+const std::vector<std::string> kRunOutputNames = {
+    "trajectory.tum", "trajectory.csv", "state.csv", "stats.json", "stats.json.part", "resets.csv", "map_static.ply",
+    "map_dynamic.ply", "map_all.ply", "run.json", "groundtruth.tum", "trajectory_loop.tum", "loops.csv",
+    "map_static_loop.ply", "map_static_on_moving.ply"};
 
- private:
-  bool isOutput(const std::filesystem::path& p) const {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    return fs::weakly_canonical(fs::absolute(p), ec) == fs::weakly_canonical(fs::absolute(final_), ec);
-  }
-  bool insideOutput(const std::filesystem::path& p) const { return isOutput(std::filesystem::absolute(p).parent_path()); }
-  std::string final_, staging_;
-  bool published_ = false;
-};
+/// OUT, staged (OUT.partial-PID until complete) and never replacing what idyvins run did not write.
+io::OutputFolderOptions runFolderOptions(const RunArgs& a) {
+  io::OutputFolderOptions o;
+  o.tool = "run";
+  o.inputs = {a.dataset, a.config, a.load_map};
+  o.force = a.force;
+  o.legacy_names = kRunOutputNames;
+  o.legacy_required = {"run.json", "stats.json"};
+  return o;
+}
 
 /// Feeds the source to the system in time order until it ends, max_frames or a stop
 /// signal; returns the number of frames.
@@ -197,8 +138,9 @@ void printSummary(const nlohmann::json& s, const std::string& out) {
               s["threads"].get<int>(), s["threads"].get<int>() == 1 ? "" : "s",
               s["threads"].get<int>() == 1 ? "sequential" : "front end of frame k+1 beside the back end of frame k");
   if (s["initialized_at_s"].get<double>() >= 0)
-    std::printf("initialized at %.2f s; %zu poses; %zu resets\n", s["initialized_at_s"].get<double>(),
-                s["poses"].get<std::size_t>(), s["resets"].size());
+    std::printf("initialized at %.2f s; %zu poses (%.1f%% of the frames); %zu resets\n",
+                s["initialized_at_s"].get<double>(), s["poses"].get<std::size_t>(),
+                100 * s["pose_share"].get<double>(), s["resets"].size());
   else
     std::printf("not initialized: %s\n", s["last_status"].get<std::string>().c_str());
   if (s["td_estimated"].get<bool>())
@@ -323,12 +265,28 @@ int reportStop(int sig, std::size_t frames, std::size_t total, const std::string
   return 128 + sig;
 }
 
+/// kOk, or kNoResult with the line saying why when the poses cover too few of the frames.
+int resultCode(const pipeline::Result& result, const std::string& out) {
+  const std::string why = pipeline::whyNoTrajectory(result);
+  if (why.empty()) return kOk;
+  std::fprintf(stderr, "error: no trajectory: %s (exit %d; the files are in %s for inspection)\n", why.c_str(), kNoResult,
+               out.c_str());
+  return kNoResult;
+}
+
+/// The config's and the dataset's warnings, one line each on stderr.
+void printWarnings(const Config& config, const Input& in) {
+  for (const auto* list : {&config.warnings, &in.warnings})
+    for (const std::string& w : *list) std::fprintf(stderr, "warning: %s\n", w.c_str());
+}
+
 int runRun(const RunArgs& a) {
   Config config;
   pipeline::System system = makeSystem(a, config);
   if (!a.load_map.empty()) system.loadMap(map::loadMap(a.load_map), !a.localization_only, a.load_map);
   Input in = openInput(a.dataset, config, a.groundtruth_topic);
-  StagedFolder folder(a.out);  // OUT.partial-PID until complete, then swapped for OUT
+  printWarnings(config, in);
+  io::OutputFolder folder(a.out, runFolderOptions(a));  // refused before the run when it is not ours to replace
   const std::size_t total = a.max_frames ? std::min(a.max_frames, in.source->frameCount()) : in.source->frameCount();
   const std::string dump = a.dump_observations.empty() ? "" : folder.extraFile(a.dump_observations);
   const std::string map_dir = a.save_map.empty() ? "" : folder.extraFolder(a.save_map);
@@ -373,11 +331,10 @@ int runRun(const RunArgs& a) {
   pipeline::addAte(summary, in.groundtruth, result);
   writeRunRecord(folder.path(), a, config, in.groundtruth, result);
   stats.finish(summary);
-  folder.publish();
+  for (const std::string& w : folder.publish()) std::fprintf(stderr, "warning: %s\n", w.c_str());
   summary["last_status"] = result.summary.last_status;
   printSummary(summary, a.out);
-  if (sig == 0) return kOk;
-  return reportStop(sig, frames, total, a.out);
+  return sig == 0 ? resultCode(result, a.out) : reportStop(sig, frames, total, a.out);
 }
 
 }  // namespace
@@ -387,6 +344,21 @@ std::string configChecksum(const Config& config) {
   for (const std::string& cam : config.cam_paths) h = fnv1a64File(cam, h);
   return hex64(h);
 }
+
+namespace {
+
+/// --out and --force.
+void addOutputOptions(CLI::App* cmd, RunArgs& a) {
+  cmd->add_option("-o,--out", a.out,
+                  "output folder: new, empty, or an earlier run's (only its files, listed in its\n"
+                  "idyvins_manifest.json, are replaced); anything else is refused before the run")
+      ->required();
+  cmd->add_flag("--force", a.force,
+                "write into an --out holding files idyvins run did not write: they stay (one in the way of an\n"
+                "output is moved aside to NAME.orig); also lets --dump-observations replace an existing file");
+}
+
+}  // namespace
 
 void registerRun(CLI::App& app, int& exit_code, const std::string& command_line) {
   auto a = std::make_shared<RunArgs>();
@@ -410,7 +382,7 @@ void registerRun(CLI::App& app, int& exit_code, const std::string& command_line)
   cmd->add_option("-d,--dataset", a->dataset,
                   "EuRoC folder or ROS1 bag (topics from the config's imu_topic, image0_topic, image1_topic)")
       ->required();
-  cmd->add_option("-o,--out", a->out, "output folder")->required();
+  addOutputOptions(cmd, *a);
   cmd->add_option("--groundtruth-topic", a->groundtruth_topic,
                   "bag only: ground-truth topic (nav_msgs/Odometry, geometry_msgs/TransformStamped, PoseStamped or\n"
                   "PointStamped), e.g. /odometry (VIODE), /vicon/firefly_sbx/firefly_sbx or /leica/position (EuRoC);\n"

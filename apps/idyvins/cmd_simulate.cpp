@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "io/bag_writer.h"
 #include "io/euroc_dataset.h"
+#include "io/output_folder.h"
 #include "progress.h"
 #include "sim/simulator.h"
 
@@ -21,7 +22,7 @@ struct SimulateArgs {
   std::string route = "default";
   double duration = 60.0, noise = 1.0, image_noise = 2.0, td_ms = 0.0;
   int threads = 2;
-  bool opening_vehicle = false, standard_set = false, depth = false;
+  bool opening_vehicle = false, standard_set = false, depth = false, force = false;
   std::string format = "euroc", compression = "none", viode_tables = IDYVINS_VIODE_TABLES;
   std::string realism = "none";
   std::string family = "standard";
@@ -37,7 +38,8 @@ std::string viodeBagName(const std::string& level) {
 
 /// OUT/<k>_<level>.bag with VIODE's topics, the colour tables copied into OUT/config and
 /// the config naming the bag's ground-truth and segmentation topics.
-void writeBag(const SimulateArgs& a, const std::string& scene, const std::string& level, const std::string& out) {
+void writeBag(const SimulateArgs& a, const std::string& scene, const std::string& level, const std::string& out,
+              const std::string& final_dir) {
   namespace fs = std::filesystem;
   const std::string vehicles = scene == "parking_lot" ? "vehicle_ids_parking_lot.txt" : "vehicle_ids_city_day.txt";
   const fs::path tables(a.viode_tables), config_dir = fs::path(out) / "config";
@@ -63,11 +65,25 @@ void writeBag(const SimulateArgs& a, const std::string& scene, const std::string
   cfg.segmentation_rgb_ids = "rgb_ids.txt";
   cfg.segmentation_vehicle_ids = vehicles;
   saveConfig(cfg, config_path);
-  if (a.format == "bag") fs::remove_all(fs::path(out) / "mav0");
-  std::printf("%s: VIODE topics /imu0 /cam0/image_raw /cam1/image_raw /odometry /cam0/segmentation\n", bag.c_str());
+  if (a.format == "bag") fs::remove_all(fs::path(out) / "mav0");  // the staging folder's, written above
+  std::printf("%s: VIODE topics /imu0 /cam0/image_raw /cam1/image_raw /odometry /cam0/segmentation\n",
+              (fs::path(final_dir) / viodeBagName(level)).string().c_str());
 }
 
-int simulateOne(const SimulateArgs& a, const std::string& scene, const std::string& level, const std::string& out) {
+/// OUT, staged and never replacing what simulate did not write (an earlier render is replaced).
+io::OutputFolderOptions simulateFolderOptions(const SimulateArgs& a) {
+  io::OutputFolderOptions o;
+  o.tool = "simulate";
+  o.inputs = {a.viode_tables};
+  o.force = a.force;
+  o.legacy_names = {"mav0", "config", "meta.json", "0_none.bag", "1_low.bag", "2_mid.bag", "3_high.bag"};
+  o.legacy_required = {"meta.json"};
+  return o;
+}
+
+int simulateOne(const SimulateArgs& a, const std::string& scene, const std::string& level, const std::string& dir) {
+  io::OutputFolder folder(dir, simulateFolderOptions(a));
+  const std::string& out = folder.path();
   sim::SimOptions o;
   if (!sim::parseFamily(a.family, o.family))
     throw CLI::ValidationError("--family", "expected standard|validation, got '" + a.family + "'");
@@ -102,10 +118,11 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
   std::printf("%s: %s %s seed %llu, %.1f s, %zu stereo frames, %zu IMU samples, path %.1f m, "
               "moving objects cover %.1f%% of cam0 on average (max %.1f%%, >=30%% in %.1f%% of frames), "
               "written in %.1f s\n",
-              out.c_str(), scene.c_str(), level.c_str(), static_cast<unsigned long long>(a.seed), a.duration,
+              dir.c_str(), scene.c_str(), level.c_str(), static_cast<unsigned long long>(a.seed), a.duration,
               r.frames, r.imu_samples, r.path_length_m, 100 * r.coverage.mean, 100 * r.coverage.max,
               100 * r.coverage.frames_over_30pct, r.seconds);
-  if (a.format != "euroc") writeBag(a, scene, level, out);
+  if (a.format != "euroc") writeBag(a, scene, level, out, dir);
+  for (const std::string& w : folder.publish()) std::fprintf(stderr, "warning: %s\n", w.c_str());
   return kOk;
 }
 
@@ -161,7 +178,11 @@ void registerSimulate(CLI::App& app, int& exit_code) {
   cmd->add_option("--seed", a->seed, "random seed of the place (layout, textures) and, unless --traffic-seed, of the run");
   addRunThroughPlaceOptions(cmd, *a);
   cmd->add_option("--duration", a->duration, "seconds of data");
-  cmd->add_option("-o,--out", a->out, "output folder (with --standard-set: the parent folder)")->required();
+  cmd->add_option("-o,--out", a->out,
+                  "output folder (with --standard-set: the parent folder): new, empty or an earlier render's\n"
+                  "(replaced); a folder holding other files is refused")
+      ->required();
+  cmd->add_flag("--force", a->force, "write into an --out holding files simulate did not write (none is removed)");
   cmd->add_option("--noise", a->noise, "IMU noise scale (0 = perfect IMU, 1 = ADIS16448-like)");
   cmd->add_option("--image-noise", a->image_noise, "pixel noise sigma, gray levels (with --realism none)");
   cmd->add_option("--realism", a->realism,

@@ -10,7 +10,9 @@
 namespace idyvins::app {
 
 /// Exit codes shared by all subcommands.
-enum ExitCode : int { kOk = 0, kInputError = 1, kUsageError = 2, kInternalError = 3 };
+/// kNoResult: the run finished but its poses cover less than pipeline::kMinPoseShare of its
+/// frames (never initialized, or lost); its files are written for inspection.
+enum ExitCode : int { kOk = 0, kInputError = 1, kUsageError = 2, kInternalError = 3, kNoResult = 4 };
 
 /// `idyvins info DATASET [--config CFG] [--json]`.
 void registerInfo(CLI::App& app, int& exit_code);

@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "io/bag_dataset.h"
+#include "io/dataset_summary.h"
 #include "io/euroc_dataset.h"
 #include "io/trajectory_io.h"
 #include "pipeline/modes.h"
@@ -16,6 +17,7 @@ Input openInput(const std::string& dataset, const Config& config, const std::str
     io::BagIndex index = io::indexBag(dataset, io::bagTopics(config, groundtruth_topic), config.image_width,
                                       config.image_height);
     Input in;
+    in.warnings = io::checkPlausible(index.dataset, io::summarize(index.dataset), config);
     in.has_masks = masks && !index.segmentation.empty();
     if (pipeline::traitsOf(config.mode).needs_masks && !in.has_masks)
       throw InputError(dataset, "mode seg needs ground-truth masks: a segmentation_topic in the config (VIODE: "
@@ -32,6 +34,7 @@ Input openInput(const std::string& dataset, const Config& config, const std::str
   }
   io::EurocDataset ds = io::readEurocDataset(dataset);
   Input in;
+  in.warnings = io::checkPlausible(ds, io::summarize(ds), config);
   for (const auto& g : ds.groundtruth) in.groundtruth.push_back({g.t_ns, g.p_w_b, g.q_w_b});
   in.unpaired_cam0 = ds.unmatched0.size();
   in.unpaired_cam1 = ds.unmatched1.size();

@@ -19,11 +19,13 @@ struct Input {
   bool has_masks = false;  ///< the frames carry ground-truth masks (left_mask)
   /// Left / right images without a partner within the pairing tolerance (not processed).
   std::size_t unpaired_cam0 = 0, unpaired_cam1 = 0;
+  /// io::checkPlausible's warnings (the config's own are in Config::warnings).
+  std::vector<std::string> warnings;
 };
 
 /// Opens `dataset` (a EuRoC folder or a ROS1 bag) for `config`. Masks are read when the
 /// dataset has them and `masks` is true; config.mode seg without masks throws
-/// InputError, as does anything the readers refuse.
+/// InputError, as does anything the readers refuse or io::checkPlausible refuses.
 Input openInput(const std::string& dataset, const Config& config, const std::string& groundtruth_topic,
                 bool masks = true);
 

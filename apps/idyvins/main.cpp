@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <string>
 
 #include "commands.h"
@@ -31,6 +32,16 @@ int main(int argc, char** argv) {
   registerConvert(app, exit_code);
   registerBench(app, exit_code);
   registerPerturb(app, exit_code);
+  std::string names;  // a first word that is no subcommand: say so (CLI11 says "A subcommand is required")
+  bool known = argc < 2 || argv[1][0] == '-';
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    names += (names.empty() ? "" : ", ") + sub->get_name();
+    known = known || sub->get_name() == argv[1];
+  }
+  if (!known) {
+    std::fprintf(stderr, "error: unknown command '%s' (expected one of %s; idyvins --help)\n", argv[1], names.c_str());
+    return kUsageError;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -39,6 +50,9 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? kOk : kUsageError;
   } catch (const idyvins::InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
+    return kInputError;
+  } catch (const std::filesystem::filesystem_error& e) {  // a path that cannot be followed: bad input
+    std::fprintf(stderr, "error: %s: %s\n", e.path1().string().c_str(), e.code().message().c_str());
     return kInputError;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "internal error: %s\n", e.what());

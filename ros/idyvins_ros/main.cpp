@@ -13,11 +13,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 
 #include "core/error.h"
 #include "driver.h"
 #include "io/config.h"
+#include "io/output_folder.h"
 #include "pipeline/modes.h"
 #include "pipeline/observers.h"
 #include "pipeline/outputs.h"
@@ -29,6 +31,7 @@ void onSignal(int) { g_stop = true; }
 
 struct NodeArgs {
   std::string config_file, mode, out;
+  bool force = false;  ///< ~force: write into an ~out holding files idyvins did not write (none removed)
   idyvins::ros_node::DriverOptions driver;
 };
 
@@ -37,6 +40,7 @@ NodeArgs readParams(ros::NodeHandle& pnh, int argc, char** argv) {
   pnh.param<std::string>("config_file", a.config_file, argc > 1 ? argv[1] : "");
   pnh.param<std::string>("mode", a.mode, "");
   pnh.param<std::string>("out", a.out, "");
+  pnh.param("force", a.force, false);
   pnh.param("threads", a.driver.threads, 1);
   pnh.param("queue_frames", a.driver.queue_frames, 0);
   pnh.param<std::string>("world_frame", a.driver.publish.world_frame, "world");
@@ -55,6 +59,7 @@ NodeArgs readParams(ros::NodeHandle& pnh, int argc, char** argv) {
 
 idyvins::Config nodeConfig(const NodeArgs& a) {
   idyvins::Config config = idyvins::loadConfig(a.config_file);
+  for (const std::string& w : config.warnings) ROS_WARN("idyvins: %s", w.c_str());
   if (!a.driver.load_map.empty()) config.loop.enabled = true;  // the map is the loop closer's database
   if (!a.mode.empty() && !idyvins::parseMode(a.mode, config.mode))
     throw idyvins::InputError("idyvins_ros", "~mode: expected " + idyvins::modeNames() + ", got '" + a.mode + "'");
@@ -103,16 +108,27 @@ void writeOutputs(const std::string& out, const idyvins::pipeline::Result& resul
   std::filesystem::rename(out + "/latency.csv.part", out + "/latency.csv");
 }
 
+/// ~out as `idyvins run` treats --out: staged, published whole, never replacing a folder it did
+/// not write (a node's folder is a run's, with latency.csv beside).
+std::unique_ptr<idyvins::io::OutputFolder> nodeFolder(const NodeArgs& a) {
+  if (a.out.empty()) return nullptr;
+  idyvins::io::OutputFolderOptions o;
+  o.tool = "run";
+  o.inputs = {a.config_file, a.driver.load_map};
+  o.force = a.force;
+  return std::make_unique<idyvins::io::OutputFolder>(a.out, o);
+}
+
 int runNode(int argc, char** argv) {
   ros::NodeHandle nh, pnh("~");
   const NodeArgs args = readParams(pnh, argc, argv);
   const idyvins::Config config = nodeConfig(args);
   std::ofstream stats_file;
   std::unique_ptr<idyvins::pipeline::StatsRecorder> stats;
-  if (!args.out.empty()) {
-    std::filesystem::create_directories(args.out);
-    stats_file.open(args.out + "/stats.json.part");
-    if (!stats_file) throw idyvins::InputError(args.out, "cannot write stats.json.part");
+  const std::unique_ptr<idyvins::io::OutputFolder> folder = nodeFolder(args);  // refused now, not at the end
+  if (folder) {
+    stats_file.open(folder->path() + "/stats.json.part");
+    if (!stats_file) throw idyvins::InputError(folder->path(), "cannot write stats.json.part");
     stats = std::make_unique<idyvins::pipeline::StatsRecorder>(stats_file);
   }
   idyvins::ros_node::Driver driver(nh, pnh, config, args.driver);
@@ -124,7 +140,10 @@ int runNode(int argc, char** argv) {
   while (!g_stop && ros::ok()) ros::WallDuration(0.02).sleep();
   spinner.stop();
   const idyvins::pipeline::Result result = driver.finish();
-  if (stats) writeOutputs(args.out, result, config.mode, driver, *stats, stats_file);
+  if (folder) {
+    writeOutputs(folder->path(), result, config.mode, driver, *stats, stats_file);
+    for (const std::string& w : folder->publish()) ROS_WARN("idyvins: %s", w.c_str());
+  }
   const nlohmann::json s = nodeSummary(driver);
   ROS_INFO("idyvins: %zu frames processed, %zu poses, %zu dropped (queue full); latency median %.1f ms, p95 %.1f ms",
            result.summary.frames, result.trajectory.size(), s["frames_dropped_queue_full"].get<std::size_t>(),

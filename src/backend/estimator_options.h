@@ -103,7 +103,7 @@ struct EstimatorOptions {
             function_tolerance);
     v.section("Camera-IMU time offset: image stamp + td = IMU time (s)");
     v.param({"estimate_td", "0/1, estimate td online"}, estimate_td);
-    v.param({"td", "s, the offset (initial value with estimate_td)"}, td_s);
+    v.param({"td", "s, the offset (initial value with estimate_td)", ParamRule::kTimeOffset}, td_s);
     v.section("Sliding-window measurement model");
     v.param({"projection_sigma_px", "px, pixel noise of projection factors", ParamRule::kPositive}, sigma_px);
     v.param({"projection_huber", "Huber threshold on the whitened residual", ParamRule::kPositive}, huber_px);

@@ -18,6 +18,7 @@ enum class ParamRule {
   kCorrelation,  ///< in [-1, 1]
   kImuNoise,     ///< in (0, 10]: an IMU noise density or random walk (SI units) that can be real
   kGravity,      ///< in [9, 10.5] m/s^2: a gravity magnitude on Earth
+  kTimeOffset,   ///< in [-0.5, 0.5] s: a camera-IMU time offset (a larger one is a unit error)
 };
 
 /// One config key.

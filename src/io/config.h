@@ -58,6 +58,10 @@ struct Config {
   /// /cam0/segmentation) and colour tables (`segmentation_rgb_ids`,
   /// `segmentation_vehicle_ids`, resolved against the config's folder).
   std::string segmentation_topic, segmentation_rgb_ids, segmentation_vehicle_ids;
+  /// What loadConfig noticed but did not refuse, one line each ("FILE:LINE: ..."): unknown keys
+  /// (with the nearest known one), VINS-Fusion keys read but not honoured. `run`, `info` and
+  /// the ROS node print them.
+  std::vector<std::string> warnings;
 
   /// The cameras and their mounts.
   camera::Rig rig() const { return {cams, T_b_c}; }

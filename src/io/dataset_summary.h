@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "io/config.h"
 #include "io/euroc_dataset.h"
 
 namespace idyvins::io {
@@ -33,5 +34,15 @@ struct DatasetSummary {
 
 /// Summarizes a dataset.
 DatasetSummary summarize(const EurocDataset& dataset);
+
+/// What `run` (and `info --config`) checks of a dataset against the config before any frame:
+/// refused (InputError naming the file): stamps in another unit than ns (the IMU's or the
+/// cameras' rate 1000x off), no IMU at the frame times, an accelerometer whose median is far
+/// from g_norm (all zero, or in g), a gyroscope whose median rate is no rig's (deg/s), a stereo
+/// config on a folder without cam1. Returned as warnings, one line each: an IMU rate below
+/// 100 Hz or 5 samples per frame, an IMU starting after the first frame or ending before the
+/// last, an accelerometer median off g_norm by more than 10 %.
+std::vector<std::string> checkPlausible(const EurocDataset& dataset, const DatasetSummary& summary,
+                                        const Config& config);
 
 }  // namespace idyvins::io

@@ -168,6 +168,8 @@ nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
           {"mean_marginalization_ms", s.sum_marginalization_ms / n},
           {"solve_profile", solveProfileJson(s)},
           {"poses", r.trajectory.size()},
+          {"pose_share", n > 0 ? static_cast<double>(r.trajectory.size()) / n : 0.0},
+          {"init_failures", s.init_failures},
           {"first_t_ns", s.first_t_ns},
           {"initialized_at_s", s.init_t_ns >= 0 ? toSeconds(s.init_t_ns - s.first_t_ns) : -1.0},
           {"frames_without_prior", s.frames_without_prior},
@@ -188,6 +190,57 @@ nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
           {"classification", nullptr},
           {"resets", resets},
           {"loop_closure", r.loop_enabled ? loopJson(r) : nlohmann::json()}};
+}
+
+namespace {
+
+/// What usually makes the estimator's initialization fail this way.
+std::string initFailureHint(const std::string& status) {
+  if (status.find("PnP failed") != std::string::npos)
+    return "too few features tracked across frames, or no parallax between them (black, frozen or unmatched images?)";
+  if (status.find("rotation disagrees") != std::string::npos)
+    return "the gyroscope disagrees with the images' rotation (gyroscope in deg/s? body_T_cam0's rotation? td?)";
+  if (status.find("alignment failed") != std::string::npos)
+    return "the IMU is inconsistent with gravity and the visual motion (accelerometer units? g_norm? IMU stamps? "
+           "stereo baseline?)";
+  return "";
+}
+
+}  // namespace
+
+std::string whyNoTrajectory(const Result& r) {
+  const Summary& s = r.summary;
+  const std::size_t poses = r.trajectory.size();
+  if (s.frames > 0 && static_cast<double>(poses) >= kMinPoseShare * static_cast<double>(s.frames)) return "";
+  char share[96];
+  std::snprintf(share, sizeof(share), "%zu poses for %zu frames (%.0f%%, at least %.0f%% expected)", poses, s.frames,
+                s.frames ? 100.0 * static_cast<double>(poses) / static_cast<double>(s.frames) : 0.0,
+                100 * kMinPoseShare);
+  std::string why = std::string(share) + ": ";
+  const double features = s.frames ? static_cast<double>(s.sum_features) / static_cast<double>(s.frames) : 0.0;
+  const auto worst = std::max_element(s.init_failures.begin(), s.init_failures.end(),
+                                      [](const auto& a, const auto& b) { return a.second < b.second; });
+  if (s.frames == 0) return why + "no frame was processed";
+  if (features < 10) {
+    char f[64];
+    std::snprintf(f, sizeof(f), "%.1f", features);
+    return why + "too few features: " + f + " per frame on average (black, saturated or textureless images?)";
+  }
+  if (worst != s.init_failures.end()) {
+    const std::string what = worst->first.substr(std::string("initializing: ").size());
+    const std::string hint = initFailureHint(worst->first);
+    return why + what + " (" + std::to_string(worst->second) + " times)" + (hint.empty() ? "" : ": " + hint);
+  }
+  if (poses == 0 && s.frames <= static_cast<std::size_t>(backend::kWindowSize))
+    return why + "the run ended after " + std::to_string(s.frames) + " frame(s); initialization needs " +
+           std::to_string(backend::kWindowSize + 1) + " frames";
+  if (!s.resets.empty()) return why + "reset at frame " + std::to_string(s.resets.back().frame) + ": " + s.resets.back().why;
+  if (s.init_t_ns >= 0) {
+    char at[96];
+    std::snprintf(at, sizeof(at), "initialized only %.2f s after the first frame", toSeconds(s.init_t_ns - s.first_t_ns));
+    return why + at + " (an IMU starting late? no motion at the start?)";
+  }
+  return why + "last status: " + s.last_status;
 }
 
 void addAte(nlohmann::json& summary, const std::vector<StampedPose>& gt, const Result& r) {

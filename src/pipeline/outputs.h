@@ -26,6 +26,15 @@ void writeResultFiles(const std::string& folder, const Result& result);
 /// is null (pipeline::toJson of the observation recorder's figures goes there).
 nlohmann::json summaryJson(const Result& result, Mode mode, double wall_s);
 
+/// A run "has a result" when its poses cover at least this share of its frames (`idyvins run`
+/// exits 4 below it; the initialization window alone is 11 frames of 20 Hz).
+inline constexpr double kMinPoseShare = 0.5;
+
+/// Why a run has fewer poses than kMinPoseShare of its frames, in one line naming the cause
+/// (the run ended before the initialization window filled, too few features, PnP or gravity
+/// alignment failures and what usually causes them); empty when it has enough.
+std::string whyNoTrajectory(const Result& result);
+
 /// Adds ate_rmse_m (SE3 alignment, stamps associated within 10 ms) and path_length_m
 /// against `groundtruth` to `summary`, and with a similarity alignment (evo's -as)
 /// ate_sim3_rmse_m and scale_error = 1/s − 1 (positive: the estimated path is too long);

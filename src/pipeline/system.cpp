@@ -14,11 +14,16 @@
 #include "imu/preintegration.h"
 
 namespace idyvins::pipeline {
+
+void checkRunnable(const Config& config) {
+  if (!config.use_imu || config.num_cam != 2 || config.T_b_c.size() < 2)
+    throw InputError(config.path, "idyvins runs stereo + IMU configs only (imu: 1, num_of_cam: 2)");
+}
+
 namespace {
 
 const Config& checkedConfig(const Config& config) {
-  if (!config.use_imu || config.num_cam != 2 || config.T_b_c.size() < 2)
-    throw InputError(config.path, "idyvins runs stereo + IMU configs only (imu: 1, num_of_cam: 2)");
+  checkRunnable(config);
   return config;
 }
 
@@ -352,6 +357,9 @@ void System::account(FrameOutput& out) {
     s.solve_sum += r.solve;
   }
   s.last_status = r.status;
+  if (!r.initialized && r.status.rfind("initializing: ", 0) == 0 && r.status.find(" frames") == std::string::npos)
+    ++s.init_failures[r.status];
+  s.sum_features += out.features.features.size();
   eliminated_.insert(eliminated_.end(), out.eliminated_points.begin(), out.eliminated_points.end());
   confirmed_.insert(confirmed_.end(), r.confirmed_points.begin(), r.confirmed_points.end());
 }

@@ -13,6 +13,7 @@
 // Observers (evaluation against masks, stats, progress) subscribe with addObserver().
 
 #include <deque>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -93,6 +94,10 @@ struct Summary {
   std::size_t solves = 0, solves_converged = 0;
   std::vector<ResetEvent> resets;
   std::string last_status;  ///< the estimator's status at the last frame
+  /// Why initialization restarted or slid, by the estimator's status ("initializing: PnP
+  /// failed, restarting", ...): what whyNoTrajectory (outputs.h) explains.
+  std::map<std::string, std::size_t> init_failures;
+  std::size_t sum_features = 0;  ///< features of every frame after the filter, summed
 };
 
 /// What finish() returns.
@@ -129,6 +134,10 @@ struct RunOptions {
   /// The options of a pipelined run (two threads, feedback_delay 1).
   static RunOptions twoThreads() { return {true, 1}; }
 };
+
+/// Throws InputError when System cannot run `config` (the rigs it runs: stereo + IMU); what
+/// its constructor refuses, for `info` to say before a run.
+void checkRunnable(const Config& config);
 
 /// The whole per-frame system of one mode: front end (tracker + the mode's filter, IDY
 /// motion prior from the estimator's newest state), estimator, maps. One per sequence.
