@@ -141,6 +141,8 @@ TEST(CliRefusals, ImplausibleRigsAreRefusedWithTheirCause) {
       {"euroc_stereo_imu_config.yaml", "-0\\.0216401454975", ".nan", "expected finite numbers"},
       {"euroc_stereo_imu_config.yaml", "0\\.0148655429818", "0.0158655429818", "not orthonormal"},
       {"euroc_stereo_imu_config.yaml", "-0\\.0198435579556", "-19.8435579556", "translations in millimetres?"},
+      {"euroc_stereo_imu_config.yaml", "image1_topic: \"/cam1/image_raw\"", "image1_topic: \"/cam0/image_raw\"",
+       "image1_topic and image0_topic are the same topic"},
   };
   for (const auto& [file, from, to, why] : cases) {
     const std::string cfg = editedConfig(dir, file, from, to);

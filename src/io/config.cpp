@@ -407,6 +407,14 @@ void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
   const fs::path folder = fs::path(f.path).parent_path();
   for (std::string* table : {&c.segmentation_rgb_ids, &c.segmentation_vehicle_ids})
     if (!table->empty() && fs::path(*table).is_relative()) *table = (folder / *table).string();
+  for (const auto& [key, topic] : {std::pair<const char*, const std::string*>{"image1_topic", &c.image1_topic},
+                                   {"segmentation_topic", &c.segmentation_topic}})
+    for (const auto& [other, other_topic] : {std::pair<const char*, const std::string*>{"image0_topic", &c.image0_topic},
+                                             {"image1_topic", &c.image1_topic}})
+      if (key != std::string(other) && !topic->empty() && *topic == *other_topic)
+        throw InputError(f.path, lineOf(f.root[key] ? f.root[key] : f.root[other]),
+                         std::string(key) + " and " + other + " are the same topic '" + *topic +
+                             "': each stream needs its own");
   if (!c.segmentation_topic.empty() && (c.segmentation_rgb_ids.empty() || c.segmentation_vehicle_ids.empty()))
     throw InputError(f.path, lineOf(f.root["segmentation_topic"]),
                      "segmentation_topic needs segmentation_rgb_ids and segmentation_vehicle_ids (VIODE's tables)");
