@@ -1,7 +1,9 @@
 # idyvins: the two commands a newcomer needs are `make demo` and `make test`.
 BUILD ?= build
 JOBS  ?= 2
-CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release -DIDYVINS_WERROR=ON
+# A unity build (8 sources per translation unit): a third less compile time, byte-identical outputs
+# (docs/ci.md); CMAKE_FLAGS="-DCMAKE_BUILD_TYPE=Release -DCMAKE_UNITY_BUILD=OFF" for one object per source.
+CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release -DIDYVINS_WERROR=ON -DCMAKE_UNITY_BUILD=ON
 # Each step's seconds go to $IDYVINS_TIMES when it is set (.ci/run's table).
 TIMED = $(CURDIR)/scripts/timed.sh
 
