@@ -468,10 +468,8 @@ std::size_t editDistance(const std::string& a, const std::string& b) {
 
 /// Warnings for the keys of `f` that idyvins does not read: an unknown key names the nearest
 /// known one when it looks like a typo; VINS-Fusion's unused keys are listed in one line.
-void warnAboutKeys(const YamlFile& f, Config& c, std::string mode_name) {
-  KeyNames declared;
-  declareAll(declared, c, mode_name);
-  std::vector<std::string> known = declared.names;
+void warnAboutKeys(const YamlFile& f, Config& c) {
+  std::vector<std::string> known = declaredKeyNames();
   known.insert(known.end(), kRigKeys.begin(), kRigKeys.end());
   std::string unused;
   for (const auto& kv : f.root) {
@@ -559,7 +557,7 @@ Config readConfig(const std::string& path, std::vector<std::string>* keys_read) 
   declareAll(loader, c, mode_name);
   checkTogether(f, mode_name, c);
   checkRig(f, c);
-  warnAboutKeys(f, c, mode_name);
+  warnAboutKeys(f, c);
   return c;
 }
 
@@ -684,6 +682,14 @@ void declareParams(ParamVisitor& visitor, Config& c) {
   std::string mode_name = toString(c.mode);
   declareAll(visitor, c, mode_name);
   if (!parseMode(mode_name, c.mode)) throw InputError("mode", "expected one of " + modeNames() + ", got '" + mode_name + "'");
+}
+
+std::vector<std::string> declaredKeyNames() {
+  Config c;
+  std::string mode_name = toString(c.mode);
+  KeyNames names;
+  declareAll(names, c, mode_name);
+  return names.names;
 }
 
 std::string keyTable() {

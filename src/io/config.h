@@ -84,6 +84,9 @@ std::string describe(const Config& config);
 /// structs, bag topics. Throws InputError when the visitor leaves an unknown mode name.
 void declareParams(ParamVisitor& visitor, Config& config);
 
+/// The name of every key declareParams visits, in its order.
+std::vector<std::string> declaredKeyNames();
+
 /// Every key beside the rig's (cameras, extrinsics, image size) as Markdown tables, one per
 /// group: key, default ("required" for VINS-Fusion's keys every config carries), unit and
 /// meaning. docs/cli.md holds it (tested).
