@@ -224,8 +224,10 @@ std::vector<std::string> OutputFolder::publish() {
     }
     if (!ec) fs::remove(staging_, ec);
   }
-  if (ec) throw InputError(final_, "cannot move the finished results into place: " + ec.message());
-  published_ = true;
+  published_ = true;  // from here the staging folder is kept: on failure it holds the only copy of the results
+  if (ec)
+    throw InputError(final_, "cannot move the finished results into place (" + ec.message() + "): they are in " +
+                                 staging_);
   return warnings;
 }
 

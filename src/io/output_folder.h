@@ -64,7 +64,8 @@ class OutputFolder {
   std::string extraFolder(const std::string& path) const;
   /// Writes the manifest and moves the results into place, replacing the previous output
   /// (only its listed files). Returns the warnings it has (files moved aside, an old folder that
-  /// could not be removed whole); throws InputError when the results cannot be moved into place.
+  /// could not be removed whole); throws InputError when the results cannot be moved into place
+  /// (the staging folder is then kept, and the message names it).
   std::vector<std::string> publish();
 
  private:
