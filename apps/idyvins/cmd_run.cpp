@@ -55,24 +55,6 @@ class ProgressObserver final : public pipeline::FrameObserver {
 std::atomic<int> g_stop_signal{0};
 extern "C" void onStopSignal(int sig) { g_stop_signal = sig; }
 
-/// What a run writes (top-level names): a folder holding only these, run.json and stats.json among
-/// them, is an earlier run written before output folders carried a manifest.
-const std::vector<std::string> kRunOutputNames = {
-    "trajectory.tum", "trajectory.csv", "state.csv", "stats.json", "stats.json.part", "resets.csv", "map_static.ply",
-    "map_dynamic.ply", "map_all.ply", "run.json", "groundtruth.tum", "trajectory_loop.tum", "loops.csv",
-    "map_static_loop.ply", "map_static_on_moving.ply"};
-
-/// OUT, staged (OUT.partial-PID until complete) and never replacing what idyvins run did not write.
-io::OutputFolderOptions runFolderOptions(const RunArgs& a) {
-  io::OutputFolderOptions o;
-  o.tool = "run";
-  o.inputs = {a.dataset, a.config, a.load_map};
-  o.force = a.force;
-  o.legacy_names = kRunOutputNames;
-  o.legacy_required = {"run.json", "stats.json"};
-  return o;
-}
-
 /// Feeds the source to the system in time order until it ends, max_frames or a stop
 /// signal; returns the number of frames.
 std::size_t drive(io::DataSource& source, pipeline::System& system, std::size_t max_frames) {
@@ -286,7 +268,8 @@ int runRun(const RunArgs& a) {
   if (!a.load_map.empty()) system.loadMap(map::loadMap(a.load_map), !a.localization_only, a.load_map);
   Input in = openInput(a.dataset, config, a.groundtruth_topic);
   printWarnings(config, in);
-  io::OutputFolder folder(a.out, runFolderOptions(a));  // refused before the run when it is not ours to replace
+  // Refused before the run when it is not an earlier run to replace.
+  io::OutputFolder folder(a.out, pipeline::runFolderOptions({a.dataset, a.config, a.load_map}, a.force));
   const std::size_t total = a.max_frames ? std::min(a.max_frames, in.source->frameCount()) : in.source->frameCount();
   const std::string dump = a.dump_observations.empty() ? "" : folder.extraFile(a.dump_observations);
   const std::string map_dir = a.save_map.empty() ? "" : folder.extraFolder(a.save_map);

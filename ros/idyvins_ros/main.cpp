@@ -112,11 +112,9 @@ void writeOutputs(const std::string& out, const idyvins::pipeline::Result& resul
 /// not write (a node's folder is a run's, with latency.csv beside).
 std::unique_ptr<idyvins::io::OutputFolder> nodeFolder(const NodeArgs& a) {
   if (a.out.empty()) return nullptr;
-  idyvins::io::OutputFolderOptions o;
-  o.tool = "run";
-  o.inputs = {a.config_file, a.driver.load_map};
-  o.force = a.force;
-  return std::make_unique<idyvins::io::OutputFolder>(a.out, o);
+  return std::make_unique<idyvins::io::OutputFolder>(
+      a.out, idyvins::pipeline::runFolderOptions({a.config_file, a.driver.load_map}, a.force,
+                                                 {"latency.csv", "latency.csv.part"}));
 }
 
 int runNode(int argc, char** argv) {

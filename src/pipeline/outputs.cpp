@@ -208,6 +208,20 @@ std::string initFailureHint(const std::string& status) {
 
 }  // namespace
 
+io::OutputFolderOptions runFolderOptions(std::vector<std::string> inputs, bool force,
+                                         const std::vector<std::string>& extra_names) {
+  io::OutputFolderOptions o;
+  o.tool = "run";
+  o.inputs = std::move(inputs);
+  o.force = force;
+  o.legacy_names = {"trajectory.tum", "trajectory.csv", "state.csv", "stats.json", "stats.json.part", "resets.csv",
+                    "map_static.ply", "map_dynamic.ply", "map_all.ply", "run.json", "groundtruth.tum",
+                    "trajectory_loop.tum", "loops.csv", "map_static_loop.ply", "map_static_on_moving.ply"};
+  o.legacy_names.insert(o.legacy_names.end(), extra_names.begin(), extra_names.end());
+  o.legacy_required = {"run.json", "stats.json"};
+  return o;
+}
+
 std::string whyNoTrajectory(const Result& r) {
   const Summary& s = r.summary;
   const std::size_t poses = r.trajectory.size();

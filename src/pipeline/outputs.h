@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "io/output_folder.h"
 #include "pipeline/system.h"
 
 namespace idyvins::pipeline {
@@ -25,6 +26,12 @@ void writeResultFiles(const std::string& folder, const Result& result);
 /// initialization, time offset, lost-corner counts, map sizes, resets; "classification"
 /// is null (pipeline::toJson of the observation recorder's figures goes there).
 nlohmann::json summaryJson(const Result& result, Mode mode, double wall_s);
+
+/// The output folder of a run (`idyvins run --out`, the ROS node's `~out`): staged, replacing only
+/// an earlier run's folder (its manifest, or, written before manifests, only the names a run writes,
+/// run.json and stats.json among them, plus `extra_names`), never one of `inputs` (io/output_folder.h).
+io::OutputFolderOptions runFolderOptions(std::vector<std::string> inputs, bool force,
+                                         const std::vector<std::string>& extra_names = {});
 
 /// A run "has a result" when its poses cover at least this share of its frames (`idyvins run`
 /// exits 4 below it; the initialization window alone is 11 frames of 20 Hz).
