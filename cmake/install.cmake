@@ -40,8 +40,15 @@ install(FILES ${PROJECT_BINARY_DIR}/idyvinsConfig.cmake ${PROJECT_BINARY_DIR}/id
 
 # pkg-config: the libraries in link order (each before what it uses).
 set(IDYVINS_PC_LIBS "")
-foreach(module pipeline sim eval map backend dynamic frontend io imu camera core)
+set(IDYVINS_PC_MODULES pipeline sim eval map backend dynamic frontend io imu camera core)
+if(IDYVINS_BUILD_BAG)  # pipeline::openDataset reads bags: the bag module and Debian's rosbag_storage
+  set(IDYVINS_PC_MODULES pipeline bag sim eval map backend dynamic frontend io imu camera core)
+endif()
+foreach(module ${IDYVINS_PC_MODULES})
   string(APPEND IDYVINS_PC_LIBS " -lidyvins_${module}")
 endforeach()
+if(IDYVINS_BUILD_BAG)
+  string(APPEND IDYVINS_PC_LIBS " -lrosbag_storage -lroscpp_serialization -lrostime -lcpp_common -lconsole_bridge -lroslz4")
+endif()
 configure_file(${PROJECT_SOURCE_DIR}/cmake/idyvins.pc.in ${PROJECT_BINARY_DIR}/idyvins.pc @ONLY)
 install(FILES ${PROJECT_BINARY_DIR}/idyvins.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

@@ -194,6 +194,11 @@ def compare_files(work, th):
     s = json.load(open(os.path.join(out, "stats.json")))["summary"]
     check(s["frames"] == FRAMES and s["ros"]["frames_in"] == FRAMES and s["ros"]["frames_dropped_queue_full"] == 0,
           "threads %d: every frame processed (%d of %d)" % (th, s["frames"], FRAMES))
+    manifest = json.load(open(os.path.join(out, "idyvins_manifest.json")))
+    check(manifest.get("tool") == "run" and "latency.csv" in manifest.get("entries", []),
+          "threads %d: ~out staged and published whole (its manifest lists latency.csv)" % th)
+    leftovers = [n for n in os.listdir(work) if n.startswith("node%d.partial-" % th)]
+    check(not leftovers, "threads %d: no staging folder left (%s)" % (th, leftovers))
     lat = open(os.path.join(out, "latency.csv")).read().split("\n")[1:]
     check(len([l for l in lat if l]) == FRAMES, "threads %d: latency.csv has one row per frame" % th)
     print("threads %d: latency median %.1f ms, p95 %.1f ms" % (th, s["ros"]["latency_median_ms"],
@@ -271,6 +276,9 @@ def test_run(idy, work):
 
 def test_bad(idy, work):
     bag, cfg = simulate(idy, work)
+    foreign = os.path.join(work, "foreign")  # a folder of the user's: ~out refuses it, before any message
+    os.makedirs(foreign, exist_ok=True)
+    open(os.path.join(foreign, "notes.txt"), "w").write("mine\n")
     with RosEnv(work) as ros:
         for name, args, expect in [
                 ("no config", [], "no config"),
@@ -281,6 +289,14 @@ def test_bad(idy, work):
             lines = [l for l in r.stderr.strip().split("\n") if l]
             check(r.returncode == 1 and len(lines) == 1 and expect in lines[0],
                   "%s: exit %d, %s" % (name, r.returncode, lines))
+        # its own name: the parameters above stay on the server under /bad
+        r = subprocess.run([NODE, "__name:=bad_out", "_config_file:=" + cfg, "_out:=" + foreign], env=ros.env,
+                           capture_output=True, text=True, timeout=60)
+        lines = [l for l in r.stderr.strip().split("\n") if l]
+        check(r.returncode == 1 and len(lines) == 1 and "file(s) idyvins run did not write" in lines[0],
+              "foreign ~out: exit %d, %s" % (r.returncode, lines))
+    check(sorted(os.listdir(foreign)) == ["notes.txt"] and open(os.path.join(foreign, "notes.txt")).read() == "mine\n",
+          "foreign ~out left as it was")
 
 
 if __name__ == "__main__":

@@ -17,7 +17,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/config.h"
 #include "pipeline/observers.h"
+#include "pipeline/run.h"
+#include "pipeline/run_outputs.h"
 #include "cli_util.h"
 #include "test_util.h"
 
@@ -295,6 +298,55 @@ TEST(Cli, RunIsByteIdenticalUnderLoadAndAcrossThreadCounts) {
   EXPECT_TRUE(sa == sb) << "stats.json differs beyond its timing fields: "
                         << nlohmann::json::diff(sa, sb).dump().substr(0, 600);
   EXPECT_GT(sa["summary"]["poses"].get<int>(), 150);
+}
+
+TEST(Cli, LibraryUserWritesTheFilesRunWrites) {
+  // A library user with pipeline::openDataset, RunOutputs and feed on 4 s of city mid with
+  // masks, and `idyvins run` on the same: every file the same bytes (stats.json beyond its
+  // timing fields, run.json beyond the working folder), the ghost map and groundtruth.tum too.
+  idyvins::test::TempDir dir;
+  const Result sim = run("simulate --scene city --level mid --seed 2 --duration 4 --out " + (dir / "ds"));
+  ASSERT_EQ(sim.code, 0) << sim.out;
+  const std::string cfg = dir / "ds/config/sim_stereo_imu_config.yaml";
+  const Result cli = run("run -c " + cfg + " -d " + (dir / "ds") + " -o " + (dir / "cli") + " --threads 1");
+  ASSERT_EQ(cli.code, 0) << cli.out;
+  {
+    idyvins::Config config = idyvins::loadConfig(cfg);
+    idyvins::pipeline::RunRequest request;
+    request.threads = 1;
+    idyvins::pipeline::System system(config, idyvins::pipeline::applyRunRequest(request, config));
+    idyvins::io::OpenedDataset in = idyvins::pipeline::openDataset(dir / "ds", config);
+    idyvins::pipeline::RunOutputsOptions files;
+    files.inputs = {dir / "ds", cfg};
+    files.masks = in.has_masks;
+    idyvins::pipeline::RunOutputs outputs(dir / "lib", files);
+    outputs.attach(system);
+    const std::size_t frames = idyvins::pipeline::feed(*in.source, system, in.source->frameCount());
+    EXPECT_EQ(frames, in.source->frameCount());
+    const idyvins::pipeline::Result result = system.finish();
+    idyvins::pipeline::RunEnd end;
+    end.extras = {{"unpaired_images", {{"cam0", in.unpaired_cam0}, {"cam1", in.unpaired_cam1}}}, {"partial", false}};
+    end.groundtruth = in.groundtruth;
+    const idyvins::pipeline::RunRecord record{"idyvins run", dir / "ds"};
+    end.record = &record;
+    outputs.write(system, result, end);
+    EXPECT_TRUE(outputs.publish().empty());
+  }
+  for (const auto& e : std::filesystem::directory_iterator(dir / "cli")) {
+    const std::string name = e.path().filename().string();
+    const std::string a = idyvins::test::readFile(e.path().string()), b = idyvins::test::readFile(dir / ("lib/" + name));
+    if (name == "stats.json") {
+      EXPECT_TRUE(withoutTiming(nlohmann::json::parse(a)) == withoutTiming(nlohmann::json::parse(b)));
+    } else if (name == "run.json") {
+      auto ra = nlohmann::json::parse(a), rb = nlohmann::json::parse(b);
+      EXPECT_EQ(ra["config_files"], rb["config_files"]);
+      EXPECT_EQ(ra["dataset"], rb["dataset"]);
+    } else if (name != "idyvins_manifest.json") {
+      EXPECT_TRUE(!a.empty() && a == b) << name << " differs";
+    }
+  }
+  for (const char* f : {"map_static_on_moving.ply", "groundtruth.tum", "trajectory.tum", "idyvins_manifest.json"})
+    EXPECT_TRUE(std::filesystem::exists(dir / (std::string("lib/") + f))) << f;
 }
 
 TEST(Cli, EvalOnRealGroundTruthAgainstItself) {

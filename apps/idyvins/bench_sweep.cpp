@@ -4,6 +4,7 @@
 #include <map>
 
 #include "commands.h"
+#include "pipeline/run.h"
 #include "core/build_info.h"
 #include "core/checksum.h"
 #include "core/error.h"
@@ -78,7 +79,7 @@ std::string datasetChecksum(const std::string& path) {
 void checksumInputs(std::vector<Job>& jobs) {
   std::map<std::string, std::string> configs, datasets;
   for (Job& j : jobs) {
-    if (!configs.count(j.config)) configs[j.config] = configChecksum(loadConfig(j.config));
+    if (!configs.count(j.config)) configs[j.config] = pipeline::configChecksum(loadConfig(j.config));
     if (!datasets.count(j.dataset)) datasets[j.dataset] = datasetChecksum(j.dataset);
     j.config_fnv1a64 = configs[j.config];
     j.dataset_fnv1a64 = datasets[j.dataset];

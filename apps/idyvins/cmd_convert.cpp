@@ -12,6 +12,7 @@
 #include "io/bag_dataset.h"
 #include "io/config.h"
 #include "io/trajectory_io.h"
+#include "pipeline/run.h"
 #include "progress.h"
 
 namespace idyvins::app {
@@ -52,7 +53,7 @@ int runConvert(const ConvertArgs& a) {
   std::optional<Config> config;
   if (!a.config.empty()) config = loadConfig(a.config);
   io::BagTopics topics;
-  if (config) topics = io::bagTopics(*config, a.groundtruth_topic);
+  if (config) topics = pipeline::datasetRequest(*config, a.groundtruth_topic).topics;
   else topics.groundtruth = a.groundtruth_topic;
   const int w = config ? config->image_width : 0, h = config ? config->image_height : 0;
   io::BagIndex index = io::indexBag(a.bag, topics, w, h);

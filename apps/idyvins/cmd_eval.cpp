@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "commands.h"
-#include "input.h"
+#include "io/open_dataset.h"
 #include "core/error.h"
 #include "eval/trajectory_metrics.h"
 #include "io/trajectory_io.h"
@@ -96,7 +96,7 @@ int runEval(const EvalArgs& a) {
   if (!eval::parseAlignMode(a.align, o.mode))
     throw CLI::ValidationError("--align", "expected se3|sim3|posyaw|none, got '" + a.align + "'");
   const auto deltas = parseDeltas(a.rpe);
-  const auto ref = readReference(a.gt);
+  const auto ref = io::readReference(a.gt);
   const auto est = io::readTrajectory(a.est);
   o.ref_poses = ref.size();
   o.est_poses = est.size();

@@ -11,6 +11,7 @@
 #include "io/bag_dataset.h"
 #include "io/config.h"
 #include "io/dataset_summary.h"
+#include "pipeline/run.h"
 #include "pipeline/system.h"
 #include "io/euroc_dataset.h"
 #include "imu/spike_gate.h"
@@ -87,7 +88,7 @@ std::pair<int, int> validateBagImages(const io::BagIndex& index, int width, int 
 
 /// Default topics for a bag without a config: VIODE's and EuRoC's names.
 io::BagTopics defaultBagTopics(const std::optional<Config>& config, const std::string& groundtruth_topic) {
-  if (config) return io::bagTopics(*config, groundtruth_topic);
+  if (config) return pipeline::datasetRequest(*config, groundtruth_topic).topics;
   io::BagTopics t;
   t.groundtruth = groundtruth_topic;
   return t;
@@ -206,7 +207,7 @@ int runInfo(const InfoArgs& args) {
   if (config) {
     pipeline::checkRunnable(*config);
     warnings = config->warnings;
-    const auto more = io::checkPlausible(ds, s, *config);
+    const auto more = io::checkPlausible(ds, s, pipeline::datasetRequest(*config).rig);
     warnings.insert(warnings.end(), more.begin(), more.end());
   }
   for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());

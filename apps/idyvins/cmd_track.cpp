@@ -7,7 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "commands.h"
-#include "input.h"
+#include "pipeline/run.h"
 #include "core/error.h"
 #include "eval/image_stats.h"
 #include "frontend/feature_tracker.h"
@@ -77,7 +77,7 @@ int runTrack(const TrackArgs& a) {
   if (!parseMode(a.mode, mode) || pipeline::traitsOf(mode).filter == pipeline::FilterKind::kIdy)
     throw CLI::ValidationError("--mode", "expected baseline|ransac|seg for the front end alone, got '" + a.mode + "'");
   config.mode = mode;
-  const Input in = openInput(a.dataset, config, "", pipeline::traitsOf(mode).needs_masks);  // a folder or a bag
+  const io::OpenedDataset in = pipeline::openDataset(a.dataset, config, "", pipeline::traitsOf(mode).needs_masks);  // a folder or a bag
   io::DataSource& source = *in.source;
   if (!a.save_tracks.empty()) {
     std::error_code ec;

@@ -35,9 +35,6 @@ void registerReport(CLI::App& app, int& exit_code);
 
 /// A word as a POSIX shell reads it back (single quotes where needed).
 std::string shellQuote(const std::string& word);
-/// FNV-1a 64 (hex) of a config file and its camera files, in that order: stats.json's
-/// config_fnv1a64, and what bench --plan / --collect compare. Throws InputError.
-std::string configChecksum(const Config& config);
 
 /// `idyvins convert BAG OUT [--config CFG] [--groundtruth-topic T]`.
 void registerConvert(CLI::App& app, int& exit_code);

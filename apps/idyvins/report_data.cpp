@@ -10,7 +10,7 @@
 #include "eval/trajectory_metrics.h"
 #include "io/ply.h"
 #include "io/trajectory_io.h"
-#include "input.h"
+#include "io/open_dataset.h"
 
 namespace fs = std::filesystem;
 
@@ -95,7 +95,7 @@ void addGroundTruth(nlohmann::json& run, const std::string& dir, const std::vect
                      "idyvins older than the report wrote the folder; report --groundtruth GT supplies one)";
     return;
   }
-  const std::vector<StampedPose> gt = fs::exists(own) ? io::readTum(own) : readReference(fallback);
+  const std::vector<StampedPose> gt = fs::exists(own) ? io::readTum(own) : io::readReference(fallback);
   run["gt_source"] = fs::exists(own) ? own : fallback;
   eval::AteResult ate;
   try {
@@ -188,7 +188,7 @@ nlohmann::json mapLayers(const std::string& dir, const eval::Similarity& align, 
 void addLoop(nlohmann::json& run, const std::string& folder, std::int64_t first, eval::Similarity& loop_align) {
   const std::vector<StampedPose> lt = io::readTum(folder + "/trajectory_loop.tum");
   if (run.contains("gt")) try {
-      const eval::AteResult ate = eval::computeAte(readReference(run["gt_source"].get<std::string>()), lt, eval::AlignMode::kSe3, 10'000'000);
+      const eval::AteResult ate = eval::computeAte(io::readReference(run["gt_source"].get<std::string>()), lt, eval::AlignMode::kSe3, 10'000'000);
       loop_align = ate.alignment;
       nlohmann::json err = {{"t", nlohmann::json::array()}, {"err", nlohmann::json::array()}};
       for (std::size_t k = 0; k < ate.errors.size(); ++k) {

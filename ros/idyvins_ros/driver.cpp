@@ -11,7 +11,7 @@ namespace idyvins::ros_node {
 Driver::Driver(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Config& config, const DriverOptions& options)
     : config_(config),
       options_(options),
-      system_(config, options.threads == 2 ? pipeline::RunOptions::twoThreads() : pipeline::RunOptions{}),
+      system_(config, options.run),
       publisher_(pnh, options.publish, [this](TimeNs t) { return arrival(t); },
                  config.loop.enabled ? LoopCorrection([this](const imu::NavState& s, Eigen::Vector3d& p,
                                                              Eigen::Quaterniond& q) { return system_.loopCorrected(s, p, q); })

@@ -25,7 +25,7 @@
 namespace idyvins::ros_node {
 
 struct DriverOptions {
-  int threads = 1;         ///< 1: sequential (lowest latency); 2: pipelined, as `idyvins run`'s default
+  pipeline::RunOptions run;  ///< sequential (lowest latency) or pipelined (pipeline::applyRunRequest)
   int queue_frames = 0;    ///< frames waiting for the system beyond which the oldest is dropped (0: never drop)
   PublisherOptions publish;
   std::string load_map;            ///< a map saved by `idyvins run --save-map` to relocalize in (loop closure on)

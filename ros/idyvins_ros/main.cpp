@@ -19,10 +19,8 @@
 #include "core/error.h"
 #include "driver.h"
 #include "io/config.h"
-#include "io/output_folder.h"
-#include "pipeline/modes.h"
-#include "pipeline/observers.h"
-#include "pipeline/outputs.h"
+#include "pipeline/run.h"
+#include "pipeline/run_outputs.h"
 
 namespace {
 
@@ -32,6 +30,7 @@ void onSignal(int) { g_stop = true; }
 struct NodeArgs {
   std::string config_file, mode, out;
   bool force = false;  ///< ~force: write into an ~out holding files idyvins did not write (none removed)
+  int threads = 1;  ///< ~threads: 1 (lowest latency) or 2 (pipelined, as `idyvins run`'s default)
   idyvins::ros_node::DriverOptions driver;
 };
 
@@ -41,31 +40,35 @@ NodeArgs readParams(ros::NodeHandle& pnh, int argc, char** argv) {
   pnh.param<std::string>("mode", a.mode, "");
   pnh.param<std::string>("out", a.out, "");
   pnh.param("force", a.force, false);
-  pnh.param("threads", a.driver.threads, 1);
+  pnh.param("threads", a.threads, 1);
   pnh.param("queue_frames", a.driver.queue_frames, 0);
   pnh.param<std::string>("world_frame", a.driver.publish.world_frame, "world");
   pnh.param<std::string>("body_frame", a.driver.publish.body_frame, "body");
   pnh.param("map_every_frames", a.driver.publish.map_every_frames, 10);
   pnh.param<std::string>("load_map", a.driver.load_map, "");
   pnh.param("localization_only", a.driver.localization_only, false);
-  if (a.driver.localization_only && a.driver.load_map.empty())
-    throw idyvins::InputError("idyvins_ros", "~localization_only needs ~load_map");
   if (a.config_file.empty()) throw idyvins::InputError("idyvins_ros", "no config: set ~config_file or pass its path");
-  if (a.driver.threads != 1 && a.driver.threads != 2)
-    throw idyvins::InputError("idyvins_ros", "~threads must be 1 or 2, got " + std::to_string(a.driver.threads));
   if (a.driver.queue_frames < 0) throw idyvins::InputError("idyvins_ros", "~queue_frames must be >= 0");
   return a;
 }
 
-idyvins::Config nodeConfig(const NodeArgs& a) {
+/// The config with the node's parameters applied by the run rules (pipeline/run.h), and the
+/// system's run options in `a.driver.run`.
+idyvins::Config nodeConfig(NodeArgs& a) {
   idyvins::Config config = idyvins::loadConfig(a.config_file);
   for (const std::string& w : config.warnings) ROS_WARN("idyvins: %s", w.c_str());
-  if (!a.driver.load_map.empty()) config.loop.enabled = true;  // the map is the loop closer's database
-  if (!a.mode.empty() && !idyvins::parseMode(a.mode, config.mode))
-    throw idyvins::InputError("idyvins_ros", "~mode: expected " + idyvins::modeNames() + ", got '" + a.mode + "'");
-  if (idyvins::pipeline::traitsOf(config.mode).needs_masks)
-    throw idyvins::InputError("idyvins_ros", std::string("mode ") + idyvins::toString(config.mode) +
-                                                 " needs ground-truth masks, which a live node does not have");
+  idyvins::pipeline::RunRequest request;
+  request.mode = a.mode;
+  request.threads = a.threads;
+  request.load_map = !a.driver.load_map.empty();
+  request.localization_only = a.driver.localization_only;
+  request.masks_available = false;  // live topics carry no ground-truth masks
+  try {
+    a.driver.run = idyvins::pipeline::applyRunRequest(request, config);
+  } catch (const idyvins::pipeline::OptionError& e) {
+    throw idyvins::InputError("idyvins_ros",
+                              "~" + e.option() + " " + e.text([](const std::string& name) { return "~" + name; }));
+  }
   return config;
 }
 
@@ -90,57 +93,49 @@ nlohmann::json nodeSummary(const idyvins::ros_node::Driver& driver) {
           {"latency_max_ms", percentile(ms, 1.0)}};
 }
 
-void writeOutputs(const std::string& out, const idyvins::pipeline::Result& result, idyvins::Mode mode,
-                  const idyvins::ros_node::Driver& driver, idyvins::pipeline::StatsRecorder& stats,
-                  std::ofstream& stats_file) {
-  idyvins::pipeline::writeResultFiles(out, result);
-  nlohmann::json summary = idyvins::pipeline::summaryJson(result, mode, 0.0);
-  summary["threads"] = driver.system().threads();
-  summary["feedback_delay"] = driver.system().runOptions().feedback_delay;
-  summary["ros"] = nodeSummary(driver);
-  stats.finish(summary);
-  stats_file.close();
-  std::filesystem::rename(out + "/stats.json.part", out + "/stats.json");
-  std::ofstream lat(out + "/latency.csv.part");
+/// ~out as `idyvins run` treats --out (pipeline::RunOutputs): staged, published whole, never
+/// replacing a folder it did not write; latency.csv beside the run's files.
+std::unique_ptr<idyvins::pipeline::RunOutputs> nodeOutputs(const NodeArgs& a) {
+  if (a.out.empty()) return nullptr;
+  idyvins::pipeline::RunOutputsOptions o;
+  o.inputs = {a.config_file, a.driver.load_map};
+  o.force = a.force;
+  o.extra_names = {"latency.csv", "latency.csv.part"};
+  return std::make_unique<idyvins::pipeline::RunOutputs>(a.out, o);
+}
+
+void writeOutputs(idyvins::pipeline::RunOutputs& outputs, const idyvins::pipeline::Result& result,
+                  const idyvins::ros_node::Driver& driver) {
+  idyvins::pipeline::RunEnd end;
+  end.extras["ros"] = nodeSummary(driver);
+  outputs.write(driver.system(), result, end);
+  const std::string lat_path = outputs.path() + "/latency.csv";
+  std::ofstream lat(lat_path + ".part");
   lat << "#stamp_ns,latency_ms\n";
   for (const auto& l : driver.publisher().latencies()) lat << l.t_ns << ',' << l.latency_ms << '\n';
   lat.close();
-  std::filesystem::rename(out + "/latency.csv.part", out + "/latency.csv");
-}
-
-/// ~out as `idyvins run` treats --out: staged, published whole, never replacing a folder it did
-/// not write (a node's folder is a run's, with latency.csv beside).
-std::unique_ptr<idyvins::io::OutputFolder> nodeFolder(const NodeArgs& a) {
-  if (a.out.empty()) return nullptr;
-  return std::make_unique<idyvins::io::OutputFolder>(
-      a.out, idyvins::pipeline::runFolderOptions({a.config_file, a.driver.load_map}, a.force,
-                                                 {"latency.csv", "latency.csv.part"}));
+  if (!lat) throw idyvins::InputError(lat_path + ".part", "write failed");
+  std::filesystem::rename(lat_path + ".part", lat_path);
 }
 
 int runNode(int argc, char** argv) {
   ros::NodeHandle nh, pnh("~");
-  const NodeArgs args = readParams(pnh, argc, argv);
+  NodeArgs args = readParams(pnh, argc, argv);
   const idyvins::Config config = nodeConfig(args);
-  std::ofstream stats_file;
-  std::unique_ptr<idyvins::pipeline::StatsRecorder> stats;
-  const std::unique_ptr<idyvins::io::OutputFolder> folder = nodeFolder(args);  // refused now, not at the end
-  if (folder) {
-    stats_file.open(folder->path() + "/stats.json.part");
-    if (!stats_file) throw idyvins::InputError(folder->path(), "cannot write stats.json.part");
-    stats = std::make_unique<idyvins::pipeline::StatsRecorder>(stats_file);
-  }
+  const std::unique_ptr<idyvins::pipeline::RunOutputs> outputs = nodeOutputs(args);  // refused now, not at the end
   idyvins::ros_node::Driver driver(nh, pnh, config, args.driver);
-  if (stats) driver.addObserver(*stats);
+  if (outputs)
+    for (idyvins::pipeline::FrameObserver* o : outputs->observers()) driver.addObserver(*o);
   ROS_INFO("idyvins: mode %s, %d thread(s); listening to %s, %s, %s", idyvins::toString(config.mode),
-           args.driver.threads, config.imu_topic.c_str(), config.image0_topic.c_str(), config.image1_topic.c_str());
+           driver.system().threads(), config.imu_topic.c_str(), config.image0_topic.c_str(), config.image1_topic.c_str());
   ros::AsyncSpinner spinner(1);
   spinner.start();
   while (!g_stop && ros::ok()) ros::WallDuration(0.02).sleep();
   spinner.stop();
   const idyvins::pipeline::Result result = driver.finish();
-  if (folder) {
-    writeOutputs(folder->path(), result, config.mode, driver, *stats, stats_file);
-    for (const std::string& w : folder->publish()) ROS_WARN("idyvins: %s", w.c_str());
+  if (outputs) {
+    writeOutputs(*outputs, result, driver);
+    for (const std::string& w : outputs->publish()) ROS_WARN("idyvins: %s", w.c_str());
   }
   const nlohmann::json s = nodeSummary(driver);
   ROS_INFO("idyvins: %zu frames processed, %zu poses, %zu dropped (queue full); latency median %.1f ms, p95 %.1f ms",

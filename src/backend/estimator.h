@@ -4,29 +4,26 @@
 // projection and marginalization factors, outlier removal, marginalization of the
 // oldest keyframe or the second newest frame, failure detection with reset.
 
-#include <array>
 #include <deque>
 #include <memory>
 #include <optional>
-#include <set>
 #include <string>
 #include <vector>
 
-#include "backend/feature_manager.h"
-#include "backend/marginalization.h"
+#include "backend/estimator_options.h"
+#include "backend/window_state.h"
+#include "camera/rig.h"
 #include "core/measurements.h"
 #include "frontend/feature_frame.h"
-#include "imu/preintegration.h"
-#include "backend/estimator_options.h"
-#include "camera/rig.h"
 
 namespace ceres {
+class CostFunction;
+class LossFunction;
 class Problem;
 }  // namespace ceres
 
 namespace idyvins::backend {
 
-constexpr int kWindowSize = 10;
 /// Below this speed (m/s) of the oldest window frame the time offset is held, not estimated.
 constexpr double kMinSpeedForTd = 0.2;
 /// A segment's biases are trusted after a failure once it has solved this many frames: two
@@ -37,13 +34,6 @@ constexpr int kSettledFrames = 2 * kWindowSize;
 constexpr double kTdInitSearchS = 0.03;
 /// A rotation-aligned offset this far (s) from the current one restarts the initialization.
 constexpr double kTdInitRestartS = 0.001;
-
-/// A map point: static, eliminated in the front end, or confirmed dynamic.
-struct MapPoint {
-  Eigen::Vector3d p_w;
-  FeatureLabel label = FeatureLabel::kStatic;
-  std::uint64_t id = 0;
-};
 
 /// A landmark as the keyframe leaving the window saw it (loop closure's keyframe database).
 struct KeyframeObservation {
@@ -135,7 +125,10 @@ struct LatestState {
   double td_s = 0;  ///< current camera–IMU time offset (image stamp + td = IMU clock)
 };
 
-/// One instance per sequence; feed IMU samples and frames in time order.
+/// One instance per sequence; feed IMU samples and frames in time order. Its rooms:
+/// estimator.cpp (the frame step), estimator_init.cpp, estimator_solve.cpp,
+/// estimator_post.cpp, estimator_reset.cpp, estimator_marginalize.cpp; its state:
+/// window_state.h.
 class Estimator {
  public:
   Estimator(const camera::Rig& rig, const ImuNoise& noise, const EstimatorOptions& options);
@@ -143,28 +136,17 @@ class Estimator {
   FrameResult addFrame(const frontend::FeatureFrame& features);
   LatestState latest() const;
   /// Current camera–IMU time offset (s): the config's td, or its estimate with estimate_td.
-  double timeOffset() const { return td_s_; }
+  double timeOffset() const { return w_.td_s; }
   const Rig& rig() const { return rig_; }
-  /// IMU samples kept since the oldest window frame (for the motion prior).
-  const std::vector<ImuSample>& imuHistory() const { return imu_; }
   /// Static landmarks that left the window (DESIGN §4.7; confirmed-dynamic ones come out in
   /// FrameResult::confirmed_points).
-  const std::vector<MapPoint>& staticMap() const { return static_map_; }
+  const std::vector<MapPoint>& staticMap() const { return map_.static_points; }
   /// Moves the static landmarks still in the window into the static map (end of a run).
   void flushMap();
   /// The marginalization prior (null before the first keyframe left the window).
-  const MarginalizationPrior* prior() const { return prior_.get(); }
+  const MarginalizationPrior* prior() const { return w_.prior.get(); }
 
  private:
-  struct Frame {
-    TimeNs t_ns = 0;
-    std::array<double, 7> pose{};
-    std::array<double, 9> sb{};
-    std::unique_ptr<imu::Preintegration> pre;  ///< from the previous frame to this one
-    Eigen::Isometry3d T_w_b() const;
-    imu::NavState nav() const;
-    void setNav(const imu::NavState& s);
-  };
   void resetWindow();
   /// After a failure: the window, and the offset back to the config's.
   void resetAfterFailure();
@@ -195,7 +177,6 @@ class Estimator {
   /// Projection factors of the usable landmarks (candidates weighted); returns how many.
   int addProjections(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
                      ceres::LossFunction& huber, std::deque<CandidateWeight>& weights, int& candidates);
-  /// Recomputes every candidate weight from the current poses.
   /// The blocks of a landmark's projection factor for `frame` (-1: its stereo factor in the
   /// anchor frame), the td block last when `with_td`.
   std::vector<double*> factorBlocks(Landmark& lm, int frame, bool with_td);
@@ -204,6 +185,7 @@ class Estimator {
   bool estimatesRays() const { return options_.estimate_anchor_ray && !options_.estimate_td; }
   /// After a solve with estimated rays: the solver blocks back into the landmarks.
   void storeRays();
+  /// Recomputes every candidate weight from the current poses.
   void refreshWeights(std::deque<CandidateWeight>& weights) const;
   /// Moves the window back so that its oldest frame keeps its yaw and position (backend/gauge.h).
   void restoreGauge(const Eigen::Isometry3d& T_w_b0_before);
@@ -229,38 +211,14 @@ class Estimator {
   void slide(bool keyframe);
   void marginalizeOldest();
   void dropSecondNewest();
-  std::vector<Eigen::Isometry3d> windowPoses() const;
 
   EstimatorOptions options_;
   Rig rig_;
   ImuNoise noise_;
-  std::vector<ImuSample> imu_;
-  std::array<Frame, kWindowSize + 1> frames_;
-  int count_ = -1;  ///< index of the newest frame in the window (-1: empty)
-  bool initialized_ = false;
-  FeatureManager fm_;
-  std::shared_ptr<MarginalizationPrior> prior_;
-  Eigen::Isometry3d last_T_w_b_ = Eigen::Isometry3d::Identity();
-  std::vector<MapPoint> static_map_;
-  std::set<std::uint64_t> mapped_;
-  /// Confirmed-dynamic landmark ids (DESIGN §4.6): they left the window for good, so
-  /// later observations of the same front-end track are ignored.
-  std::set<std::uint64_t> dynamic_ids_;
-  double td_s_ = 0;  ///< camera–IMU time offset (s), a solver block when estimate_td
-  bool td_restarted_ = false;  ///< the initialization restarted once for the offset (since the last failure)
-  /// The last good state (after the newest successful frame) and whether the next
-  /// initialization must continue from it (a reset happened since).
-  std::optional<imu::NavState> last_good_;
+  WindowState w_;
+  SegmentState seg_;
+  MapState map_;
   std::optional<LeavingKeyframe> leaving_;  ///< set by marginalizeOldest, moved into the frame's result
-  TimeNs last_good_t_ns_ = 0;
-  bool reanchor_pending_ = false;
-  /// Frames solved since this segment's initialization, and whether the last good state came
-  /// late enough in its segment for its biases to be trusted after a failure (kSettledFrames).
-  int segment_frames_ = 0;
-  bool last_good_settled_ = false;
-  /// The last good state's biases (ba, bg), tying the first window after a failure until its
-  /// first marginalization prior (EstimatorOptions::reset_bias_prior_acc, _gyr).
-  std::optional<Eigen::Matrix<double, 6, 1>> bias_anchor_;
 };
 
 }  // namespace idyvins::backend

@@ -396,16 +396,6 @@ cv::Mat labelsFromColors(const cv::Mat& rgb, const SegmentationColors& colors) {
   return labels;
 }
 
-BagTopics bagTopics(const Config& config, const std::string& groundtruth_topic) {
-  BagTopics t;
-  t.imu = config.imu_topic;
-  t.image0 = config.image0_topic;
-  t.image1 = config.num_cam == 2 ? config.image1_topic : "";
-  t.groundtruth = groundtruth_topic.empty() ? config.groundtruth_topic : groundtruth_topic;
-  t.segmentation = config.segmentation_topic;
-  return t;
-}
-
 bool isBagFile(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return false;

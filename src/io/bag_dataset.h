@@ -15,7 +15,6 @@
 #include <string>
 #include <vector>
 
-#include "io/config.h"
 #include "io/data_source.h"
 #include "io/euroc_dataset.h"
 
@@ -50,10 +49,6 @@ SegmentationColors readSegmentationColors(const std::string& rgb_ids_path, const
 
 /// The CV_8UC1 mask (moving-object labels, 0 = static) of a CV_8UC3 image in RGB order.
 cv::Mat labelsFromColors(const cv::Mat& rgb, const SegmentationColors& colors);
-
-/// The topics a config names (image1 only with two cameras); a non-empty
-/// `groundtruth_topic` overrides the config's.
-BagTopics bagTopics(const Config& config, const std::string& groundtruth_topic = "");
 
 /// One topic of a bag, as its index lists it.
 struct BagTopicInfo {

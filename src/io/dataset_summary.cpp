@@ -79,7 +79,7 @@ void checkUnit(const std::string& file, const StreamStats& s, double max_hz, con
 
 }  // namespace
 
-std::vector<std::string> checkPlausible(const EurocDataset& ds, const DatasetSummary& s, const Config& c) {
+std::vector<std::string> checkPlausible(const EurocDataset& ds, const DatasetSummary& s, const ExpectedRig& c) {
   std::vector<std::string> warnings;
   const std::string imu_file = ds.root + "/imu0/data.csv", cam_file = ds.root + "/cam0/data.csv";
   if (c.num_cam == 2 && !ds.stereo())
@@ -95,7 +95,7 @@ std::vector<std::string> checkPlausible(const EurocDataset& ds, const DatasetSum
                                    std::to_string(ds.pairs.back().t_ns) + " ns): stamps of another clock or unit?");
   std::vector<double> acc, gyr;
   for (const ImuSample& m : ds.imu) acc.push_back(m.acc_b.norm()), gyr.push_back(m.gyr_b.norm());
-  const double a = medianOf(acc), w = medianOf(gyr), g = c.imu.g_norm;
+  const double a = medianOf(acc), w = medianOf(gyr), g = c.g_norm;
   if (a < 0.3 * g || a > 3 * g)
     throw InputError(imu_file, "accelerometer median " + fixed(a, 3) + " m/s^2, expected about g_norm " + fixed(g, 3) +
                                    (a > 0.5 && a < 1.5 ? " (in g? expected m/s^2)" : " (all zero? another unit?)"));

@@ -4,7 +4,6 @@
 #include <string>
 #include <vector>
 
-#include "io/config.h"
 #include "io/euroc_dataset.h"
 
 namespace idyvins::io {
@@ -35,6 +34,13 @@ struct DatasetSummary {
 /// Summarizes a dataset.
 DatasetSummary summarize(const EurocDataset& dataset);
 
+/// What a dataset is checked against (the config's rig).
+struct ExpectedRig {
+  int num_cam = 2;       ///< 2: the dataset must have cam1
+  bool use_imu = true;   ///< false: the IMU is not checked
+  double g_norm = 9.81;  ///< m/s^2, the accelerometer median's reference
+};
+
 /// What `run` (and `info --config`) checks of a dataset against the config before any frame:
 /// refused (InputError naming the file): stamps in another unit than ns (the IMU's or the
 /// cameras' rate 1000x off), no IMU at the frame times, an accelerometer whose median is far
@@ -43,6 +49,6 @@ DatasetSummary summarize(const EurocDataset& dataset);
 /// 100 Hz or 5 samples per frame, an IMU starting after the first frame or ending before the
 /// last, an accelerometer median off g_norm by more than 10 %.
 std::vector<std::string> checkPlausible(const EurocDataset& dataset, const DatasetSummary& summary,
-                                        const Config& config);
+                                        const ExpectedRig& rig);
 
 }  // namespace idyvins::io

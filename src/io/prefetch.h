@@ -1,5 +1,5 @@
 #pragma once
-// Reads a DataSource on a background thread (image decoding overlaps processing),
+// A DataSource read on a background thread (image decoding overlaps processing),
 // keeping at most `max_frames` stereo frames ahead. Order and content are unchanged.
 
 #include <condition_variable>
@@ -10,11 +10,12 @@
 
 #include "io/data_source.h"
 
-namespace idyvins::app {
+namespace idyvins::io {
 
+/// `source` read ahead on its own thread; next() gives what source.next() would, in order.
 class PrefetchSource {
  public:
-  PrefetchSource(io::DataSource& source, std::size_t max_frames) : source_(source), max_frames_(max_frames) {
+  PrefetchSource(DataSource& source, std::size_t max_frames) : source_(source), max_frames_(max_frames) {
     thread_ = std::thread([this] { produce(); });
   }
   ~PrefetchSource() {
@@ -26,14 +27,14 @@ class PrefetchSource {
     thread_.join();
   }
   /// The next measurement, or nullopt at the end; rethrows the reader's error.
-  std::optional<io::Measurement> next() {
+  std::optional<Measurement> next() {
     std::unique_lock<std::mutex> lock(mutex_);
     cv_.wait(lock, [this] { return !queue_.empty() || done_; });
     if (queue_.empty()) {
       if (error_) std::rethrow_exception(error_);
       return std::nullopt;
     }
-    io::Measurement m = std::move(queue_.front());
+    Measurement m = std::move(queue_.front());
     queue_.pop_front();
     if (std::holds_alternative<StereoFrame>(m)) --frames_queued_;
     cv_.notify_all();
@@ -65,7 +66,7 @@ class PrefetchSource {
     cv_.notify_all();
   }
 
-  io::DataSource& source_;
+  DataSource& source_;
   std::size_t max_frames_;
   std::deque<io::Measurement> queue_;
   std::size_t frames_queued_ = 0;
@@ -76,4 +77,4 @@ class PrefetchSource {
   std::thread thread_;
 };
 
-}  // namespace idyvins::app
+}  // namespace idyvins::io

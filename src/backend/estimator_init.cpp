@@ -1,0 +1,153 @@
+// Initialization of the window (DESIGN §2): PnP of each new frame against the window's stereo
+// landmarks checked against the gyroscope, the time offset from the rotations (estimate_td),
+// gyroscope bias, gravity and velocities from the IMU.
+
+#include "backend/estimator.h"
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+#include "backend/initializer.h"
+
+namespace idyvins::backend {
+
+using Eigen::Isometry3d;
+using Eigen::Quaterniond;
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+bool Estimator::initStep(FrameResult& r) {
+  const int n = w_.count;
+  if (n > 0) {
+    if (!pnp(n)) {
+      r.status = "initializing: PnP failed, restarting";
+      resetWindow();
+      return false;
+    }
+    // Check the visual rotation against the gyroscope before accepting the frame.
+    const Quaterniond q_vis = Quaterniond(w_.frames[n - 1].T_w_b().linear()).conjugate() *
+                              Quaterniond(w_.frames[n].T_w_b().linear());
+    const double diff_deg = q_vis.angularDistance(w_.frames[n].pre->deltaQ()) * 180.0 / M_PI;
+    if (diff_deg > options_.init_rotation_check_deg) {
+      r.status = "initializing: PnP rotation disagrees with the gyroscope, restarting";
+      resetWindow();
+      return false;
+    }
+  }
+  w_.fm.triangulate(w_.poses(), rig_);
+  if (n < kWindowSize) {
+    r.status = "initializing: " + std::to_string(n + 1) + "/" + std::to_string(kWindowSize + 1) + " frames";
+    return false;
+  }
+  if (estimatesTd() && !seg_.td_restarted && alignTimeOffset(r)) return false;
+  if (!alignAndStart()) {
+    r.status = "initializing: gravity/velocity alignment failed, sliding";
+    slide(true);
+    return false;
+  }
+  r.status = "initialized";
+  if (seg_.reanchor_pending) {
+    r.biases_from_last_good = biasesFromLastGood();  // as alignAndStart decided
+    r.reanchored = reanchor();
+  }
+  return true;
+}
+
+bool Estimator::alignTimeOffset(FrameResult& r) {
+  std::vector<Quaterniond> q;
+  std::vector<TimeNs> t;
+  for (int i = 0; i <= w_.count; ++i) {
+    q.push_back(Quaterniond(w_.frames[i].T_w_b().linear()));
+    t.push_back(w_.frames[i].t_ns);
+  }
+  const std::optional<double> shift = alignRotationTimes(q, t, w_.imu, kTdInitSearchS);
+  if (!shift || std::abs(*shift) < kTdInitRestartS) return false;
+  // Moving the window's observations by the shift starts its solve far from where PnP put
+  // the poses (a shift of all poses along the motion is nearly free for the IMU factors and
+  // the solver crawls along it): start again with frames stamped with the new offset.
+  w_.td_s += *shift;
+  seg_.td_restarted = true;
+  resetWindow();
+  r.status = "initializing: time offset " + std::to_string(1e3 * w_.td_s) + " ms from the rotations, restarting";
+  return true;
+}
+
+bool Estimator::pnp(int n) {
+  std::vector<cv::Point3d> obj;
+  std::vector<cv::Point2d> img;
+  std::vector<std::uint64_t> ids;
+  for (const auto& [id, lm] : w_.fm.landmarks()) {
+    if (lm.inv_depth <= 0 || lm.start_frame >= n || lm.endFrame() != n) continue;
+    const Vector3d p_w = cameraPose(w_.frames[lm.start_frame].T_w_b(), rig_.T_b_c0) * lm.anchorPoint();
+    obj.emplace_back(p_w.x(), p_w.y(), p_w.z());
+    img.emplace_back(lm.obs.back().xy.x(), lm.obs.back().xy.y());
+    ids.push_back(id);
+  }
+  if (static_cast<int>(obj.size()) < options_.min_pnp_points) return false;
+  // Initial guess: the previous camera pose.
+  const Isometry3d T_c_w = cameraPose(w_.frames[n - 1].T_w_b(), rig_.T_b_c0).inverse();
+  cv::Mat rvec, tvec;
+  cv::Mat R_cv;
+  cv::eigen2cv(Eigen::Matrix3d(T_c_w.linear()), R_cv);
+  cv::Rodrigues(R_cv, rvec);
+  cv::eigen2cv(Vector3d(T_c_w.translation()), tvec);
+  std::vector<int> inliers;
+  const bool ok = cv::solvePnPRansac(obj, img, cv::Mat::eye(3, 3, CV_64F), cv::Mat(), rvec, tvec, true, 100,
+                                     2.0 / rig_.focal_px, 0.99, inliers, cv::SOLVEPNP_ITERATIVE);
+  if (!ok || static_cast<int>(inliers.size()) < options_.min_pnp_points) return false;
+  // Drop the landmarks PnP found inconsistent (moving objects, bad tracks).
+  std::vector<bool> is_inlier(ids.size(), false);
+  for (int i : inliers) is_inlier[i] = true;
+  std::vector<std::uint64_t> outliers;
+  for (std::size_t i = 0; i < ids.size(); ++i)
+    if (!is_inlier[i]) outliers.push_back(ids[i]);
+  w_.fm.remove(outliers);
+  cv::Rodrigues(rvec, R_cv);
+  Eigen::Matrix3d R;
+  Vector3d t;
+  cv::cv2eigen(R_cv, R);
+  cv::cv2eigen(tvec, t);
+  Isometry3d T_c_w_new = Isometry3d::Identity();
+  T_c_w_new.linear() = R;
+  T_c_w_new.translation() = t;
+  Isometry3d T_b_c = Isometry3d::Identity();
+  T_b_c.linear() = rig_.T_b_c0.q_b_c.toRotationMatrix();
+  T_b_c.translation() = rig_.T_b_c0.t_b_c;
+  const Isometry3d T_w_b = T_c_w_new.inverse() * T_b_c.inverse();
+  imu::NavState s = w_.frames[n].nav();
+  s.p_w_b = T_w_b.translation();
+  s.q_w_b = Quaterniond(T_w_b.linear()).normalized();
+  w_.frames[n].setNav(s);
+  return true;
+}
+
+bool Estimator::alignAndStart() {
+  std::vector<Quaterniond> q;
+  std::vector<const imu::Preintegration*> pre;
+  for (int i = 0; i <= w_.count; ++i) {
+    q.push_back(Quaterniond(w_.frames[i].T_w_b().linear()));
+    pre.push_back(w_.frames[i].pre.get());
+  }
+  const Vector3d bg = solveGyroBias(q, pre);
+  for (int i = 1; i <= w_.count; ++i) w_.frames[i].pre->repropagate(Vector3d::Zero(), bg);
+  const Alignment a = alignVelocityGravity(w_.poses(), pre, noise_.g_norm);
+  if (!a.ok) return false;
+  const Quaterniond R0 = Quaterniond::FromTwoVectors(a.g_w, Vector3d::UnitZ());
+  const bool from_last_good = biasesFromLastGood();
+  for (int i = 0; i <= w_.count; ++i) {
+    imu::NavState s = w_.frames[i].nav();
+    s.p_w_b = R0 * s.p_w_b;
+    s.q_w_b = (R0 * s.q_w_b).normalized();
+    s.v_w = R0 * a.v_w[i];
+    s.bg = bg;
+    s.ba = from_last_good ? seg_.last_good->ba : Vector3d::Zero();
+    w_.frames[i].setNav(s);
+  }
+  if (from_last_good && (options_.reset_bias_prior_acc > 0 || options_.reset_bias_prior_gyr > 0)) {
+    seg_.bias_anchor.emplace();
+    *seg_.bias_anchor << seg_.last_good->ba, seg_.last_good->bg;
+  }
+  w_.initialized = true;
+  return true;
+}
+}  // namespace idyvins::backend

@@ -1,0 +1,204 @@
+// The window's solve: state blocks, the marginalization prior, the bias anchor after a reset,
+// IMU and projection factors (candidates weighted 1/m_j, refreshed every iteration, DESIGN
+// §4.5), Ceres, then the gauge restored and the preintegrations repropagated.
+
+#include "backend/estimator.h"
+
+#include <ceres/ceres.h>
+
+#include <chrono>
+#include <deque>
+#include <functional>
+
+#include "backend/gauge.h"
+#include "backend/imu_factor.h"
+#include "backend/landmark_factors.h"
+#include "backend/parameter_blocks.h"
+#include "dynamic/dynamic.h"
+
+namespace idyvins::backend {
+
+using Eigen::Isometry3d;
+using Eigen::Quaterniond;
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+namespace {
+const PoseManifold kPoseManifold;
+}  // namespace
+
+void Estimator::optimize(FrameResult& r) {
+  const auto start = std::chrono::steady_clock::now();
+  ceres::Problem problem(borrowingProblemOptions());
+  std::vector<std::shared_ptr<ceres::CostFunction>> costs;  // owned here, borrowed by the problem
+  ceres::HuberLoss huber(options_.huber_px);
+  r.skipped_blocks = addStateAndImu(problem, costs);
+  // Candidate weights 1/m_j (DESIGN §4.5): one value per (landmark, frame), owned here,
+  // pointed to by the factors and refreshed by the iteration callback below.
+  std::deque<CandidateWeight> weights;
+  r.landmarks = addProjections(problem, costs, huber, weights, r.candidates);
+  // The offset is observable only in motion: held while the oldest frame is slow (as VINS-Fusion).
+  if (estimatesTd() && problem.HasParameterBlock(&w_.td_s) && w_.frames[0].nav().v_w.norm() < kMinSpeedForTd)
+    problem.SetParameterBlockConstant(&w_.td_s);
+  refreshWeights(weights);
+  struct Refresh : ceres::IterationCallback {
+    std::function<void()> f;
+    ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+      f();
+      return ceres::SOLVER_CONTINUE;
+    }
+  } callback;
+  callback.f = [&] { refreshWeights(weights); };
+  ceres::Solver::Options o;
+  if (!weights.empty()) {
+    o.callbacks.push_back(&callback);
+    o.update_state_every_iteration = true;  // the callback reads the current poses
+  }
+  o.linear_solver_type = ceres::DENSE_SCHUR;
+  o.trust_region_strategy_type = ceres::DOGLEG;
+  o.max_num_iterations = options_.max_num_iterations;
+  o.function_tolerance = options_.function_tolerance;
+  if (options_.time_limited) o.max_solver_time_in_seconds = options_.max_solver_time_s;  // live only
+  o.num_threads = 1;  // deterministic
+  const Isometry3d T_w_b0_before = w_.frames[0].T_w_b();
+  const auto solve_start = std::chrono::steady_clock::now();
+  ceres::Solver::Summary summary;
+  ceres::Solve(o, &problem, &summary);
+  const auto post_start = std::chrono::steady_clock::now();
+  if (estimatesRays()) storeRays();
+  if (options_.fix_gauge) restoreGauge(T_w_b0_before);
+  for (int i = 1; i <= w_.count; ++i) {
+    const imu::NavState s = w_.frames[i - 1].nav();
+    if (w_.frames[i].pre->needsRepropagation(s.ba, s.bg)) w_.frames[i].pre->repropagate(s.ba, s.bg);
+  }
+  const auto end = std::chrono::steady_clock::now();
+  using Ms = std::chrono::duration<double, std::milli>;
+  r.optimization_ms = Ms(end - start).count();
+  SolveProfile& p = r.solve;
+  p.build_ms = Ms(solve_start - start).count();
+  p.post_ms = Ms(end - post_start).count();
+  p.preprocess_ms = 1e3 * summary.preprocessor_time_in_seconds;
+  p.residual_ms = 1e3 * summary.residual_evaluation_time_in_seconds;
+  p.jacobian_ms = 1e3 * summary.jacobian_evaluation_time_in_seconds;
+  p.linear_solver_ms = 1e3 * summary.linear_solver_time_in_seconds;
+  p.minimizer_ms = 1e3 * summary.minimizer_time_in_seconds;
+  p.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  p.converged = summary.termination_type == ceres::CONVERGENCE;
+}
+
+bool Estimator::finiteAt(const ceres::CostFunction& cost, const std::vector<double*>& blocks) {
+  std::vector<double> residuals(static_cast<std::size_t>(cost.num_residuals()));
+  if (!cost.Evaluate(blocks.data(), residuals.data(), nullptr)) return false;
+  for (double x : residuals)
+    if (!std::isfinite(x)) return false;
+  return true;
+}
+
+int Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
+  int skipped = 0;
+  for (int i = 0; i <= w_.count; ++i) {
+    problem.AddParameterBlock(w_.frames[i].pose.data(), 7, const_cast<PoseManifold*>(&kPoseManifold));
+    problem.AddParameterBlock(w_.frames[i].sb.data(), 9);
+  }
+  // Every block is evaluated once before it enters the problem: one that is not finite at
+  // the start values (a degenerate integration, a prior gone bad) is left out and counted.
+  if (w_.prior) {
+    costs.push_back(std::make_shared<MarginalizationFactor>(w_.prior));
+    if (finiteAt(*costs.back(), w_.prior->blocks))
+      problem.AddResidualBlock(costs.back().get(), nullptr, w_.prior->blocks);
+    else
+      ++skipped;
+  }
+  addBiasAnchor(problem, costs);
+  for (int i = 1; i <= w_.count; ++i) {
+    if (w_.frames[i].pre->sumDt() > 10.0) continue;
+    costs.push_back(std::make_shared<ImuFactor>(w_.frames[i].pre.get()));
+    const std::vector<double*> blocks{w_.frames[i - 1].pose.data(), w_.frames[i - 1].sb.data(), w_.frames[i].pose.data(),
+                                      w_.frames[i].sb.data()};
+    if (finiteAt(*costs.back(), blocks))
+      problem.AddResidualBlock(costs.back().get(), nullptr, blocks);
+    else
+      ++skipped;
+  }
+  return skipped;
+}
+
+void Estimator::addBiasAnchor(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
+  if (w_.prior) seg_.bias_anchor.reset();  // the window has its own prior now
+  if (!seg_.bias_anchor) return;
+  costs.push_back(std::make_shared<BiasPriorFactor>(seg_.bias_anchor->head<3>(), seg_.bias_anchor->tail<3>(),
+                                                    options_.reset_bias_prior_acc, options_.reset_bias_prior_gyr));
+  problem.AddResidualBlock(costs.back().get(), nullptr, w_.frames[0].sb.data());
+}
+
+std::vector<double*> Estimator::factorBlocks(Landmark& lm, int frame, bool with_td) {
+  std::vector<double*> blocks;
+  if (frame >= 0) blocks = {w_.frames[lm.start_frame].pose.data(), w_.frames[frame].pose.data()};
+  if (estimatesRays()) {
+    lm.ray_block = {lm.anchorRay().x(), lm.anchorRay().y(), lm.inv_depth};
+    blocks.push_back(lm.ray_block.data());
+  } else {
+    blocks.push_back(&lm.inv_depth);
+  }
+  if (with_td) blocks.push_back(&w_.td_s);
+  return blocks;
+}
+
+int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
+                              ceres::LossFunction& huber, std::deque<CandidateWeight>& weights,
+                              int& candidates) {
+  const ProjectionWeight w{rig_.focal_px, options_.sigma_px, nullptr};
+  int used = 0;
+  for (auto& [id, lm] : w_.fm.landmarks()) {
+    if (!inSolve(lm)) continue;
+    ++used;
+    const bool candidate = options_.candidate_weights && lm.label == FeatureLabel::kCandidate;
+    candidates += candidate;
+    std::map<int, const double*> scale_of_frame;
+    if (candidate) {
+      for (std::size_t k = 1; k < lm.obs.size(); ++k) {
+        weights.push_back({&lm, lm.start_frame + static_cast<int>(k), 1.0});
+        scale_of_frame[weights.back().frame] = &weights.back().info;
+      }
+    }
+    for (const auto& lf :
+         landmarkFactors(lm, rig_, w, TdUse{estimatesTd(), std::nullopt}, scale_of_frame, estimatesRays())) {
+      costs.push_back(lf.cost);
+      problem.AddResidualBlock(lf.cost.get(), &huber, factorBlocks(lm, lf.frame, estimatesTd()));
+    }
+  }
+  return used;
+}
+
+void Estimator::storeRays() {
+  for (auto& [id, lm] : w_.fm.landmarks()) {
+    if (!inSolve(lm)) continue;
+    lm.ray_estimated = true;
+    lm.ray_xy = Vector2d(lm.ray_block[0], lm.ray_block[1]);
+    lm.inv_depth = lm.ray_block[2];
+  }
+}
+
+void Estimator::refreshWeights(std::deque<CandidateWeight>& weights) const {
+  for (auto& wt : weights) {
+    const Isometry3d T_ci = cameraPose(w_.frames[wt.lm->start_frame].T_w_b(), rig_.T_b_c0);
+    const Isometry3d T_cj = cameraPose(w_.frames[wt.frame].T_w_b(), rig_.T_b_c0);
+    const Isometry3d T_ci_cj = T_ci.inverse() * T_cj;
+    const double m = dynamic::epipolarErrorPx2(wt.lm->obs.front().xy, wt.lm->obs[wt.frame - wt.lm->start_frame].xy,
+                                               T_ci_cj.linear(), T_ci_cj.translation(), rig_.fx, rig_.fy);
+    wt.info = dynamic::candidateInformation(m);
+  }
+}
+
+void Estimator::restoreGauge(const Isometry3d& T_w_b0_before) {
+  const Isometry3d G = gaugeCorrection(T_w_b0_before, w_.frames[0].T_w_b());
+  const Quaterniond q_G(G.linear());
+  for (int i = 0; i <= w_.count; ++i) {
+    imu::NavState s = w_.frames[i].nav();
+    s.p_w_b = G * s.p_w_b;
+    s.q_w_b = (q_G * s.q_w_b).normalized();
+    s.v_w = q_G * s.v_w;
+    w_.frames[i].setNav(s);
+  }
+}
+}  // namespace idyvins::backend
