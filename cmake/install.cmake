@@ -6,7 +6,7 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-set(IDYVINS_LIBRARY_MODULES core camera imu io frontend dynamic backend eval sim map pipeline)
+set(IDYVINS_LIBRARY_MODULES core camera imu io config frontend dynamic backend eval sim map pipeline)
 if(IDYVINS_BUILD_BAG)
   list(APPEND IDYVINS_LIBRARY_MODULES bag)
 endif()
@@ -40,9 +40,9 @@ install(FILES ${PROJECT_BINARY_DIR}/idyvinsConfig.cmake ${PROJECT_BINARY_DIR}/id
 
 # pkg-config: the libraries in link order (each before what it uses).
 set(IDYVINS_PC_LIBS "")
-set(IDYVINS_PC_MODULES pipeline sim eval map backend dynamic frontend io imu camera core)
+set(IDYVINS_PC_MODULES pipeline sim eval map backend dynamic frontend config io imu camera core)
 if(IDYVINS_BUILD_BAG)  # pipeline::openDataset reads bags: the bag module and Debian's rosbag_storage
-  set(IDYVINS_PC_MODULES pipeline bag sim eval map backend dynamic frontend io imu camera core)
+  set(IDYVINS_PC_MODULES pipeline bag sim eval map backend dynamic frontend config io imu camera core)
 endif()
 foreach(module ${IDYVINS_PC_MODULES})
   string(APPEND IDYVINS_PC_LIBS " -lidyvins_${module}")

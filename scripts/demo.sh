@@ -9,7 +9,7 @@ ROOT=$(cd "$(dirname "$0")/.." && pwd)
 BIN="$ROOT/$BUILD/apps/idyvins"
 DATA="$ROOT/data_sim/demo_city_high_s1"
 OUT="$ROOT/out/demo"
-# A render cached before 2026-11-28 carries every key at that day's default (the simulator now writes
+# A render cached by an earlier version carries every key at that day's default (the simulator now writes
 # only the changed ones, under this comment line): render it again so that today's defaults apply.
 if [ -f "$DATA/meta.json" ] && ! grep -q "^# Keys not written here have their defaults" "$DATA/config/sim_stereo_imu_config.yaml"; then
   echo "== the cached sequence's config pins old defaults: rendering it again"

@@ -20,6 +20,8 @@ PACKAGES=(
   libfaiss-dev
   # make fuzz: libFuzzer and the sanitizers' runtime
   clang libclang-rt-14-dev
+  # the format check (tests: CodeFormat): the tree as .clang-format writes it
+  clang-format
   # bench --plan: the GNU parallel recipe and its test
   parallel
   # idyvins report's browser test (headless, driven by playwright-core from web/)

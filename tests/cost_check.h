@@ -11,8 +11,8 @@
 
 namespace idyvins::test {
 
-inline void checkCostFunction(const ceres::CostFunction& cost, const std::vector<double*>& blocks,
-                              double rel = 1e-6, const std::string& what = "") {
+inline void checkCostFunction(const ceres::CostFunction& cost, const std::vector<double*>& blocks, double rel = 1e-6,
+                              const std::string& what = "") {
   const auto& sizes = cost.parameter_block_sizes();
   const int m = cost.num_residuals();
   ASSERT_EQ(sizes.size(), blocks.size());

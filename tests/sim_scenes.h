@@ -4,8 +4,8 @@
 #include <Eigen/Geometry>
 #include <string>
 
+#include "config/config.h"
 #include "frontend/feature_frame.h"
-#include "io/config.h"
 #include "sim/simulator.h"
 
 namespace idyvins::test {
@@ -31,7 +31,8 @@ inline sim::SimOptions options(const std::string& scene, sim::Level level, doubl
   return o;
 }
 
-/// A city street without traffic plus one vehicle driving along `lane_dir` (default +y: crossing), textured as vehicle 1.
+/// A city street without traffic plus one vehicle driving along `lane_dir` (default +y: crossing), textured as
+/// vehicle 1.
 inline sim::Scene crossingVehicleScene(double duration_s, const std::string& type, const Vector3d& size,
                                        const Vector3d& lane_start, double speed,
                                        const Vector3d& lane_dir = Vector3d::UnitY()) {

@@ -2,13 +2,13 @@
 // bags pass, damaged ones (cut, lengths changed, fuzz findings) are one InputError.
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <unistd.h>
 
 #include "core/error.h"
 #include "io/bag_dataset.h"
@@ -28,9 +28,9 @@ std::optional<std::string> problemOf(const std::string& bytes) {
 std::string smallBag(const std::string& compression) {
   EurocDataset ds = readEurocDataset(IDYVINS_SHARED_DATA "/euroc_v101_micro");
   ds.cam0.resize(4), ds.cam1.resize(4);
-  ds.pairs.erase(std::remove_if(ds.pairs.begin(), ds.pairs.end(),
-                                [](const StereoPair& p) { return p.i0 >= 4 || p.i1 >= 4; }),
-                 ds.pairs.end());
+  ds.pairs.erase(
+      std::remove_if(ds.pairs.begin(), ds.pairs.end(), [](const StereoPair& p) { return p.i0 >= 4 || p.i1 >= 4; }),
+      ds.pairs.end());
   // per process: another build's tests may write the same name at the same time
   const std::string path =
       ::testing::TempDir() + "/idyvins_small_" + std::to_string(::getpid()) + "_" + compression + ".bag";
@@ -97,7 +97,8 @@ TEST(BagStructure, FuzzFindingsAreRefusedWithOneClearError) {
       ADD_FAILURE() << "accepted";
     } catch (const InputError& err) {
       // the structural check speaks (byte offset), before rosbag_storage reads anything
-      EXPECT_NE(std::string(err.what()).find("not a readable ROS1 bag (truncated or damaged?): byte "), std::string::npos)
+      EXPECT_NE(std::string(err.what()).find("not a readable ROS1 bag (truncated or damaged?): byte "),
+                std::string::npos)
           << err.what();
     }
     ++replayed;

@@ -23,10 +23,8 @@ CameraParams fisheye() {  // typical equidistant calibration (TUM-VI-like values
   p.type = ModelType::kKannalaBrandt;
   p.width = 512;
   p.height = 512;
-  p.fx = 190.97847715128717, p.fy = 190.9733070521226, p.cx = 254.93170605935475,
-  p.cy = 256.8974428996504;
-  p.dist = {0.0034823894022493434, 0.0007150348452162257, -0.0020532361418706202,
-            0.00020293673591811182};
+  p.fx = 190.97847715128717, p.fy = 190.9733070521226, p.cx = 254.93170605935475, p.cy = 256.8974428996504;
+  p.dist = {0.0034823894022493434, 0.0007150348452162257, -0.0020532361418706202, 0.00020293673591811182};
   return p;
 }
 
@@ -80,7 +78,7 @@ TEST(PinholeRadtan, ImageCornersRoundTrip) {
   const auto cam = makeCamera(eurocCam0());
   const double w = cam->params().width - 1, h = cam->params().height - 1;
   for (const Eigen::Vector2d& px : {Eigen::Vector2d(0, 0), Eigen::Vector2d(w, 0), Eigen::Vector2d(0, h),
-                                   Eigen::Vector2d(w, h), Eigen::Vector2d(w / 2, h / 2)}) {
+                                    Eigen::Vector2d(w, h), Eigen::Vector2d(w / 2, h / 2)}) {
     Eigen::Vector2d xy, back;
     ASSERT_TRUE(cam->liftToNormalized(px, xy)) << px.transpose();
     ASSERT_TRUE(cam->projectNormalized(xy, back));
@@ -88,11 +86,9 @@ TEST(PinholeRadtan, ImageCornersRoundTrip) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, CameraModels, ::testing::Values(eurocCam0(), fisheye()),
-                         [](const auto& info) {
-                           return std::string(info.param.type == ModelType::kPinhole ? "PinholeRadtan"
-                                                                                     : "KannalaBrandt");
-                         });
+INSTANTIATE_TEST_SUITE_P(Models, CameraModels, ::testing::Values(eurocCam0(), fisheye()), [](const auto& info) {
+  return std::string(info.param.type == ModelType::kPinhole ? "PinholeRadtan" : "KannalaBrandt");
+});
 
 TEST(PinholeRadtan, MatchesTheDistortionFormula) {
   const auto cam = makeCamera(eurocCam0());

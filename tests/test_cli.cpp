@@ -12,16 +12,15 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
-#include "io/config.h"
+#include "cli_util.h"
+#include "config/config.h"
 #include "pipeline/observers.h"
 #include "pipeline/run.h"
 #include "pipeline/run_outputs.h"
-#include "cli_util.h"
 #include "test_util.h"
 
 namespace {
@@ -44,9 +43,9 @@ TEST(Cli, HelpForEverySubcommand) {
 
 TEST(Cli, UsageErrorsExitTwo) {
   // docs/cli.md: usage errors exit 2 (CLI11's own codes are 101-120).
-  EXPECT_EQ(run("").code, 2);                                  // no subcommand
-  EXPECT_EQ(run("frobnicate").code, 2);                        // unknown subcommand
-  EXPECT_EQ(run("run --config c.yaml").code, 2);               // required options missing
+  EXPECT_EQ(run("").code, 2);                                     // no subcommand
+  EXPECT_EQ(run("frobnicate").code, 2);                           // unknown subcommand
+  EXPECT_EQ(run("run --config c.yaml").code, 2);                  // required options missing
   EXPECT_EQ(run("run -c c.yaml -d d -o o --threads 3").code, 2);  // out of range
   const Result frames = run("run -c c.yaml -d d -o o --frames -1");
   EXPECT_EQ(frames.code, 2);
@@ -56,13 +55,11 @@ TEST(Cli, UsageErrorsExitTwo) {
 }
 
 TEST(Cli, InfoOnRealEurocExcerpt) {
-  const Result r = run("info " + kMicro + " --config " + IDYVINS_SOURCE_DIR +
-                       "/config/euroc/euroc_stereo_imu_config.yaml");
+  const Result r =
+      run("info " + kMicro + " --config " + IDYVINS_SOURCE_DIR + "/config/euroc/euroc_stereo_imu_config.yaml");
   ASSERT_EQ(r.code, 0) << r.out;
-  EXPECT_NE(r.out.find("imu0          29120 samples   200.00 Hz  span  145.595 s"),
-            std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("cam0             95 images     20.00 Hz  span    4.700 s"),
-            std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("imu0          29120 samples   200.00 Hz  span  145.595 s"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("cam0             95 images     20.00 Hz  span    4.700 s"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("cam1             99 images"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("stereo pairs     95 frames"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("cam0 0, cam1 4 rows without a partner"), std::string::npos) << r.out;
@@ -74,7 +71,8 @@ TEST(Cli, InfoOnRealEurocExcerpt) {
 TEST(Cli, InfoCountsTheImuSpikesRunWouldDrop) {
   // 25 ms of 10 g added to the real excerpt's IMU at 2 s: info names the spike run drops.
   idyvins::test::TempDir dir;
-  const Result p = run("perturb " + kMicro + " " + (dir / "spiked") + " --fault imu-spike --at 2 --count 5 --magnitude 100");
+  const Result p =
+      run("perturb " + kMicro + " " + (dir / "spiked") + " --fault imu-spike --at 2 --count 5 --magnitude 100");
   ASSERT_EQ(p.code, 0) << p.out;
   const Result r = run("info " + (dir / "spiked") + " --skip-images");
   ASSERT_EQ(r.code, 0) << r.out;
@@ -128,7 +126,8 @@ TEST(Cli, SimulateWritesADatasetThatInfoValidates) {
                            (dir / "ds") + " --mode seg --save-tracks " + (dir / "tracks"));
   ASSERT_EQ(track.code, 0) << track.out;
   EXPECT_NE(track.out.find("11 frames, mode seg"), std::string::npos) << track.out;
-  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir / "tracks"), std::filesystem::directory_iterator{}), 11);
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir / "tracks"), std::filesystem::directory_iterator{}),
+            11);
 }
 
 TEST(Cli, RunIdyWritesOutputsAndObservationDump) {
@@ -171,7 +170,8 @@ TEST(Cli, RunIdyWritesOutputsAndObservationDump) {
     EXPECT_EQ(std::stod(cols[8]) >= 0, std::stod(cols[13]) > 0);  // a depth exactly where a χ² is
     if (!cols[14].empty()) {  // the right match, pixels: inside the 752 x 480 image, beside the left one
       ++with_right;
-      EXPECT_TRUE(std::stod(cols[14]) >= 0 && std::stod(cols[14]) < 752 && std::abs(std::stod(cols[15]) - std::stod(cols[3])) < 3)
+      EXPECT_TRUE(std::stod(cols[14]) >= 0 && std::stod(cols[14]) < 752 &&
+                  std::abs(std::stod(cols[15]) - std::stod(cols[3])) < 3)
           << csv.substr(pos, end - pos);
     }
     if (std::stod(cols[8]) >= 0) {
@@ -182,10 +182,10 @@ TEST(Cli, RunIdyWritesOutputsAndObservationDump) {
     pos = end + 1;
   }
   EXPECT_GT(rows, 5000u);
-  EXPECT_GT(tested, rows / 2);   // most tracked features have right matches in both frames
+  EXPECT_GT(tested, rows / 2);  // most tracked features have right matches in both frames
   EXPECT_GT(with_right, tested);
-  EXPECT_GT(eliminated, 50u);    // the trucks
-  EXPECT_GT(on_moving, 500u);    // masks were read
+  EXPECT_GT(eliminated, 50u);  // the trucks
+  EXPECT_GT(on_moving, 500u);  // masks were read
   // Stereo test off in the config: no χ² in the dump.
   {
     std::string text = idyvins::test::readFile(cfg);
@@ -286,8 +286,8 @@ TEST(Cli, RunIsByteIdenticalUnderLoadAndAcrossThreadCounts) {
   }
   ASSERT_EQ(loaded.code, 0) << loaded.out;
   EXPECT_NE(loaded.out.find("2 threads"), std::string::npos) << loaded.out;
-  for (const char* f : {"trajectory.tum", "trajectory.csv", "state.csv", "map_static.ply", "map_dynamic.ply",
-                        "map_all.ply"}) {
+  for (const char* f :
+       {"trajectory.tum", "trajectory.csv", "state.csv", "map_static.ply", "map_dynamic.ply", "map_all.ply"}) {
     const std::string a = idyvins::test::readFile(dir / (std::string("idle/") + f));
     EXPECT_GT(a.size(), 1000u) << f;
     EXPECT_TRUE(a == idyvins::test::readFile(dir / (std::string("loaded/") + f))) << f << " differs";
@@ -334,7 +334,8 @@ TEST(Cli, LibraryUserWritesTheFilesRunWrites) {
   }
   for (const auto& e : std::filesystem::directory_iterator(dir / "cli")) {
     const std::string name = e.path().filename().string();
-    const std::string a = idyvins::test::readFile(e.path().string()), b = idyvins::test::readFile(dir / ("lib/" + name));
+    const std::string a = idyvins::test::readFile(e.path().string()),
+                      b = idyvins::test::readFile(dir / ("lib/" + name));
     if (name == "stats.json") {
       EXPECT_TRUE(withoutTiming(nlohmann::json::parse(a)) == withoutTiming(nlohmann::json::parse(b)));
     } else if (name == "run.json") {
@@ -382,8 +383,7 @@ TEST(Cli, ImageSizeDifferentFromConfig) {
       const auto pos = text.find(from);
       ASSERT_NE(pos, std::string::npos);
       text.replace(pos, std::string(from).size(),
-                   std::string(from).substr(0, std::string(from).find(':')) +
-                       (from[6] == 'w' ? ": 640" : ": 480"));
+                   std::string(from).substr(0, std::string(from).find(':')) + (from[6] == 'w' ? ": 640" : ": 480"));
     }
     idyvins::test::writeFile(dir / f, text);
   }
@@ -397,8 +397,8 @@ TEST(Cli, BenchRefusesDataSimulatedWithAnotherRealism) {
   idyvins::test::TempDir dir;
   std::filesystem::create_directories(dir / "data/city_none_s1");
   idyvins::test::writeFile(dir / "data/city_none_s1/meta.json", "{\"scene\": \"city\"}\n");  // before --realism: none
-  const Result r = run("bench --suite standard --out " + (dir / "out") + " --data " + (dir / "data") +
-                       " --seeds 1 --realism euroc");
+  const Result r =
+      run("bench --suite standard --out " + (dir / "out") + " --data " + (dir / "data") + " --seeds 1 --realism euroc");
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.out.find("city_none_s1: simulated with --realism none, the benchmark asks for euroc"), std::string::npos)
       << r.out;
@@ -411,11 +411,13 @@ TEST(Cli, BenchRefusesDataOfTheOtherFamily) {
   // A folder of standard sequences is not the validation suite, and the other way round.
   idyvins::test::TempDir dir;
   std::filesystem::create_directories(dir / "data/city_none_s1");
-  idyvins::test::writeFile(dir / "data/city_none_s1/meta.json", "{\"scene\": \"city\"}\n");  // before --family: standard
+  idyvins::test::writeFile(dir / "data/city_none_s1/meta.json",
+                           "{\"scene\": \"city\"}\n");  // before --family: standard
   const Result r = run("bench --suite validation --out " + (dir / "out") + " --data " + (dir / "data") + " --seeds 1");
   EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.out.find("city_none_s1: simulated with --family standard, the validation suite needs --family validation"),
-            std::string::npos)
+  EXPECT_NE(
+      r.out.find("city_none_s1: simulated with --family standard, the validation suite needs --family validation"),
+      std::string::npos)
       << r.out;
   idyvins::test::writeFile(dir / "data/city_none_s1/meta.json", "{\"scene\": \"city\", \"family\": \"validation\"}\n");
   const Result s = run("bench --suite standard --out " + (dir / "out") + " --data " + (dir / "data") + " --seeds 1");

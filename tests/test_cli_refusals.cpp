@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <sstream>
 #include <regex>
+#include <sstream>
 #include <string>
 
 #include "cli_util.h"
@@ -73,8 +73,8 @@ TEST(CliRefusals, RunNeverWritesIntoTheDatasetAParentOfItOrAFolderOfForeignFiles
   const std::string ds = datasetWithImu(dir, [](auto&) { return true; });
   writeFile(dir / "mine/notes.txt", "mine");
   const std::string run = "run -c " + kConfig + " -d " + ds + " --frames 40 -o ";
-  for (const std::string& out : {ds, dir.path().string(), ds + "/mav0/out", dir / "mine", std::string("''"),
-                                 dir / "ds/mav0/imu0/data.csv"}) {
+  for (const std::string& out :
+       {ds, dir.path().string(), ds + "/mav0/out", dir / "mine", std::string("''"), dir / "ds/mav0/imu0/data.csv"}) {
     const auto r = runCli(run + out);
     EXPECT_EQ(r.code, 1) << out << "\n" << r.out;
     EXPECT_FALSE(has(r, "frames (")) << "refused only after the run:\n" << r.out;
@@ -136,7 +136,8 @@ TEST(CliRefusals, ARunWithoutATrajectoryExitsFourAndSaysWhy) {
 TEST(CliRefusals, ImplausibleRigsAreRefusedWithTheirCause) {
   TempDir dir;
   const std::vector<std::tuple<std::string, std::string, std::string, std::string>> cases = {
-      {"euroc_stereo_imu_config.yaml", "\ntd: 0\\.0", "\ntd: 100", "expected a camera-IMU offset within 0.5 s (td is in seconds)"},
+      {"euroc_stereo_imu_config.yaml", "\ntd: 0\\.0", "\ntd: 100",
+       "expected a camera-IMU offset within 0.5 s (td is in seconds)"},
       {"cam0_pinhole.yaml", "k1: [-0-9.e]+", "k1: 1e6", "moves the image corner by a factor"},
       {"euroc_stereo_imu_config.yaml", "-0\\.0216401454975", ".nan", "expected finite numbers"},
       {"euroc_stereo_imu_config.yaml", "0\\.0148655429818", "0.0158655429818", "not orthonormal"},
@@ -167,7 +168,8 @@ TEST(CliRefusals, ImplausibleRigsAreRefusedWithTheirCause) {
 
 TEST(CliRefusals, DataInTheWrongUnitOrWithoutIMUAtTheFramesIsRefused) {
   const std::vector<std::tuple<std::function<bool(std::vector<std::string>&)>, std::string>> cases = {
-      {[](auto& f) { return f[0] = std::to_string(std::stoll(f[0]) / 1000), true; }, "the IMU at 200000 Hz if its stamps are ns"},
+      {[](auto& f) { return f[0] = std::to_string(std::stoll(f[0]) / 1000), true; },
+       "the IMU at 200000 Hz if its stamps are ns"},
       {[](auto& f) {
          for (int i = 1; i <= 3; ++i) f[i] = std::to_string(std::stod(f[i]) * 57.29578);
          return true;
@@ -189,7 +191,8 @@ TEST(CliRefusals, DataInTheWrongUnitOrWithoutIMUAtTheFramesIsRefused) {
     EXPECT_TRUE(has(runCli("info " + ds + " -c " + kConfig + " --skip-images"), why));
   }
   TempDir dir;  // a stereo config on a folder without cam1: run refuses it as info does
-  const std::string mono = datasetWithImu(dir, [](auto&) { return true; }, /*with_cam1=*/false);
+  const std::string mono = datasetWithImu(
+      dir, [](auto&) { return true; }, /*with_cam1=*/false);
   const auto r = runCli("run -c " + kConfig + " -d " + mono + " -o " + dir / "out");
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_TRUE(has(r, "but the dataset has no cam1/")) << r.out;
@@ -214,8 +217,10 @@ TEST(CliRefusals, ASlowOrLateImuAndMisspelledKeysAreWarnedAbout) {
   EXPECT_EQ(t.code, 0) << t.out;
   EXPECT_TRUE(has(t, "unknown key 'equalise' ignored; did you mean 'equalize'?")) << t.out;
   EXPECT_TRUE(has(t, "valid: yes, with 1 warning(s)")) << t.out;
-  const std::string extr = editedConfig(dir, "euroc_stereo_imu_config.yaml", "estimate_extrinsic: 0", "estimate_extrinsic: 1");
-  EXPECT_TRUE(has(runCli("info " + kMicro + " -c " + extr + " --skip-images"), "estimate_extrinsic: 1 is not honoured"));
+  const std::string extr =
+      editedConfig(dir, "euroc_stereo_imu_config.yaml", "estimate_extrinsic: 0", "estimate_extrinsic: 1");
+  EXPECT_TRUE(
+      has(runCli("info " + kMicro + " -c " + extr + " --skip-images"), "estimate_extrinsic: 1 is not honoured"));
 }
 
 TEST(CliRefusals, PerturbDefaultsChangeTheDataAndBadMagnitudesAreRefused) {
@@ -228,9 +233,9 @@ TEST(CliRefusals, PerturbDefaultsChangeTheDataAndBadMagnitudesAreRefused) {
     const std::string file = imu ? "/mav0/imu0/data.csv" : "/mav0/cam1/data.csv";
     EXPECT_NE(readFile(out + file), readFile(kMicro + file)) << fault << ": the default did nothing";
   }
-  for (const char* bad : {"--fault time-jump --magnitude nan", "--fault desync --magnitude 0",
-                                 "--fault imu-spike --magnitude inf", "--fault black --at 100",
-                                 "--fault black --magnitude 3", "--fault salt --magnitude 150"}) {
+  for (const char* bad :
+       {"--fault time-jump --magnitude nan", "--fault desync --magnitude 0", "--fault imu-spike --magnitude inf",
+        "--fault black --at 100", "--fault black --magnitude 3", "--fault salt --magnitude 150"}) {
     const auto r = runCli("perturb " + kMicro + " " + dir / "bad " + std::string(bad));
     EXPECT_EQ(r.code, 2) << bad << "\n" << r.out;
     EXPECT_FALSE(fs::exists(dir / "bad")) << bad;

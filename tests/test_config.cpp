@@ -1,25 +1,23 @@
 #include <gtest/gtest.h>
 
-#include <filesystem>
 #include <algorithm>
+#include <filesystem>
 #include <regex>
 
+#include "config/config.h"
 #include "core/error.h"
-#include "io/config.h"
 #include "test_util.h"
 
 namespace idyvins {
 namespace {
 
+using test::expectError;
 using test::readFile;
 using test::sharedData;
-using test::expectError;
 using test::TempDir;
 using test::writeFile;
 
-std::string configPath(const std::string& rel) {
-  return std::string(IDYVINS_SOURCE_DIR) + "/config/" + rel;
-}
+std::string configPath(const std::string& rel) { return std::string(IDYVINS_SOURCE_DIR) + "/config/" + rel; }
 
 TEST(Config, ReadsViodePublishedCalibration) {
   const Config c = loadConfig(sharedData("viode_calibration/calibration.yaml"));
@@ -35,9 +33,9 @@ TEST(Config, ReadsViodePublishedCalibration) {
   r_expected << 0, 0, 1, 1, 0, 0, 0, 1, 0;
   EXPECT_TRUE(c.T_b_c[0].linear().isApprox(r_expected));
   EXPECT_NEAR((c.T_b_c[1].translation() - c.T_b_c[0].translation()).norm(), 0.05, 1e-12);
-  EXPECT_DOUBLE_EQ(c.imu.acc_n, 0.2);
-  EXPECT_DOUBLE_EQ(c.imu.gyr_w, 4.0e-5);
-  EXPECT_DOUBLE_EQ(c.imu.g_norm, 9.81007);
+  EXPECT_DOUBLE_EQ(c.imu.noise.acc_n, 0.2);
+  EXPECT_DOUBLE_EQ(c.imu.noise.gyr_w, 4.0e-5);
+  EXPECT_DOUBLE_EQ(c.imu.noise.g_norm, 9.81007);
   EXPECT_EQ(c.tracker.max_cnt, 120);
   EXPECT_TRUE(c.tracker.flow_back);
   EXPECT_EQ(c.estimator.max_num_iterations, 8);
@@ -48,8 +46,8 @@ TEST(Config, ReadsViodePublishedCalibration) {
 }
 
 TEST(Config, ShippedConfigsLoad) {
-  for (const char* rel : {"euroc/euroc_stereo_imu_config.yaml", "viode/viode_stereo_imu_config.yaml",
-                          "sim/sim_stereo_imu_config.yaml"}) {
+  for (const char* rel :
+       {"euroc/euroc_stereo_imu_config.yaml", "viode/viode_stereo_imu_config.yaml", "sim/sim_stereo_imu_config.yaml"}) {
     SCOPED_TRACE(rel);
     const Config c = loadConfig(configPath(rel));
     EXPECT_EQ(c.num_cam, 2);
@@ -84,7 +82,7 @@ void expectSameParameters(const Config& a, const Config& b) {
   EXPECT_EQ(keys(a), keys(b));
   EXPECT_EQ(a.estimator.estimate_td, b.estimator.estimate_td);
   EXPECT_EQ(a.estimator.td_s, b.estimator.td_s);
-  EXPECT_EQ(a.imu.acc_n, b.imu.acc_n);
+  EXPECT_EQ(a.imu.noise.acc_n, b.imu.noise.acc_n);
   EXPECT_EQ(a.idy.stereo.min_disparity_px, b.idy.stereo.min_disparity_px);
 }
 
@@ -108,20 +106,32 @@ class MoveAwayFromDefaults final : public ParamVisitor {
   void section(const char*) override {}
   void param(const ParamKey& k, double& v) override {
     switch (k.rule) {
-      case ParamRule::kOpenUnit: v = v == 0.5 ? 0.3 : 0.5; break;
-      case ParamRule::kFraction: v = v == 0.5 ? 0.7 : 0.5; break;
-      case ParamRule::kCorrelation: v = v == 0.3 ? 0.4 : 0.3; break;
-      case ParamRule::kImuNoise: v = v == 0.5 ? 0.7 : 0.5; break;
-      case ParamRule::kGravity: v = v == 9.8 ? 9.79 : 9.8; break;
-      case ParamRule::kTimeOffset: v = v == 0.01 ? 0.02 : 0.01; break;
-      default: v += 1.5;
+      case ParamRule::kOpenUnit:
+        v = v == 0.5 ? 0.3 : 0.5;
+        break;
+      case ParamRule::kFraction:
+        v = v == 0.5 ? 0.7 : 0.5;
+        break;
+      case ParamRule::kCorrelation:
+        v = v == 0.3 ? 0.4 : 0.3;
+        break;
+      case ParamRule::kImuNoise:
+        v = v == 0.5 ? 0.7 : 0.5;
+        break;
+      case ParamRule::kGravity:
+        v = v == 9.8 ? 9.79 : 9.8;
+        break;
+      case ParamRule::kTimeOffset:
+        v = v == 0.01 ? 0.02 : 0.01;
+        break;
+      default:
+        v += 1.5;
     }
   }
   void param(const ParamKey&, int& v) override { v += 1; }
   void param(const ParamKey&, bool& v) override { v = !v; }
   void param(const ParamKey&, std::string&) override {}
 };
-
 
 TEST(Config, EveryKeyLoadReadsIsPrintedAndSaved) {
   test::TempDir dir;
@@ -166,7 +176,7 @@ TEST(Config, SavingOnlyChangedKeysLeavesDefaultsToTheCode) {
   saveConfig(c, dir / "changed.yaml", SavedKeys::kChanged);
   const std::string file = test::readFile(dir / "changed.yaml");
   EXPECT_NE(file.find("\nstereo_refine: "), std::string::npos);
-  EXPECT_NE(file.find("\nacc_w: "), std::string::npos);             // required with an IMU
+  EXPECT_NE(file.find("\nacc_w: "), std::string::npos);               // required with an IMU
   EXPECT_NE(file.find("\nmax_num_iterations: "), std::string::npos);  // required (VINS-Fusion's)
   EXPECT_EQ(file.find("\nprojection_sigma_px: "), std::string::npos);
   EXPECT_EQ(file.find("\nprior_landmark_share: "), std::string::npos);
@@ -206,8 +216,7 @@ TEST(Config, EurocConfigMatchesTheDatasetsOwnCalibration) {
 }
 
 /// A minimal valid config + camera in a temp folder; `mutate` edits the config text.
-std::string writeConfig(const TempDir& dir, const std::string& config_text,
-                        const std::string& camera_text) {
+std::string writeConfig(const TempDir& dir, const std::string& config_text, const std::string& camera_text) {
   writeFile(dir / "cam.yaml", camera_text);
   writeFile(dir / "cfg.yaml", config_text);
   return dir / "cfg.yaml";
@@ -246,17 +255,13 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
   EXPECT_DOUBLE_EQ(c.T_b_c[0].translation().x(), 0.1);
   EXPECT_EQ(c.mode, Mode::kRansac);
   EXPECT_DOUBLE_EQ(c.idy.lambda_dy, 5.0);
-  EXPECT_TRUE(c.idy.confirm_outliers);  // default
-  EXPECT_FALSE(loadWith(dir, "confirm_outliers_dynamic: 0\n")
-                   .idy.confirm_outliers);
-  EXPECT_TRUE(c.idy.lost_track_test);  // default
-  EXPECT_FALSE(loadWith(dir, "lost_track_test: 0\n")
-                   .idy.lost_track_test);
-  expectError([&] { loadWith(dir, "lost_track_test: yes\n"); },
-              "lost_track_test");
-  EXPECT_TRUE(c.idy.follow_eliminated);  // default
-  EXPECT_FALSE(loadWith(dir, "follow_eliminated: 0\n")
-                   .idy.follow_eliminated);
+  EXPECT_TRUE(c.estimator.confirm_outliers);  // default
+  EXPECT_FALSE(loadWith(dir, "confirm_outliers_dynamic: 0\n").estimator.confirm_outliers);
+  EXPECT_TRUE(c.tracker.lost_track_test);  // default
+  EXPECT_FALSE(loadWith(dir, "lost_track_test: 0\n").tracker.lost_track_test);
+  expectError([&] { loadWith(dir, "lost_track_test: yes\n"); }, "lost_track_test");
+  EXPECT_TRUE(c.tracker.follow_eliminated);  // default
+  EXPECT_FALSE(loadWith(dir, "follow_eliminated: 0\n").tracker.follow_eliminated);
   EXPECT_FALSE(c.estimator.estimate_td);
   EXPECT_DOUBLE_EQ(c.estimator.td_s, 0.0);
   EXPECT_TRUE(c.idy.stereo.enabled);  // defaults of the stereo motion test
@@ -291,38 +296,25 @@ TEST(Config, MinimalConfigWithRelativeCameraPath) {
   EXPECT_DOUBLE_EQ(s.idy.stereo.min_disparity_px, 1.5);
   EXPECT_DOUBLE_EQ(s.idy.stereo.remove_chi2, 0.0);
   EXPECT_EQ(s.idy.stereo.persistent_strikes, 0);
-  expectError(
-      [&] { loadWith(dir, "stereo_motion_persistent_strikes: -1\n"); },
-      "stereo_motion_persistent_strikes");
-  expectError([&] { loadWith(dir, "stereo_motion_remove_chi2: -1\n"); },
-              "stereo_motion_remove_chi2");
-  expectError([&] { loadWith(dir, "stereo_motion_noise_ref: -1\n"); },
-              "stereo_motion_noise_ref");
-  expectError(
-      [&] { loadWith(dir, "stereo_motion_noise_quantile: 1\n"); },
-      "stereo_motion_noise_quantile");
-  expectError(
-      [&] { loadWith(dir, "stereo_motion_min_disparity_px: -2\n"); },
-      "stereo_motion_min_disparity_px");
-  expectError([&] { loadWith(dir, "stereo_motion_sigma_px: 0\n"); },
-              "stereo_motion_sigma_px");
+  expectError([&] { loadWith(dir, "stereo_motion_persistent_strikes: -1\n"); }, "stereo_motion_persistent_strikes");
+  expectError([&] { loadWith(dir, "stereo_motion_remove_chi2: -1\n"); }, "stereo_motion_remove_chi2");
+  expectError([&] { loadWith(dir, "stereo_motion_noise_ref: -1\n"); }, "stereo_motion_noise_ref");
+  expectError([&] { loadWith(dir, "stereo_motion_noise_quantile: 1\n"); }, "stereo_motion_noise_quantile");
+  expectError([&] { loadWith(dir, "stereo_motion_min_disparity_px: -2\n"); }, "stereo_motion_min_disparity_px");
+  expectError([&] { loadWith(dir, "stereo_motion_sigma_px: 0\n"); }, "stereo_motion_sigma_px");
 }
 
 TEST(Config, SolverTimeLimitIsOffUnlessAskedFor) {
   TempDir dir;
   const Config c = loadConfig(writeConfig(dir, kConfig, kCamera));
   EXPECT_FALSE(c.estimator.time_limited) << "offline solves must not depend on the clock";
-  EXPECT_DOUBLE_EQ(c.estimator.max_solver_time_s, 0.04);  // read, kept for live use
+  EXPECT_DOUBLE_EQ(c.estimator.max_solver_time_s, 0.04);   // read, kept for live use
   EXPECT_DOUBLE_EQ(c.estimator.function_tolerance, 1e-4);  // measured default (Ceres' own is 1e-6)
-  EXPECT_DOUBLE_EQ(
-      loadWith(dir, "solver_function_tolerance: 1e-6\n")
-          .estimator.function_tolerance,
-      1e-6);
+  EXPECT_DOUBLE_EQ(loadWith(dir, "solver_function_tolerance: 1e-6\n").estimator.function_tolerance, 1e-6);
   const Config live = loadWith(dir, "solver_time_limit: 1\n");
   EXPECT_TRUE(live.estimator.time_limited);
   EXPECT_NE(describe(live).find("applied"), std::string::npos);
-  expectError([&] { loadWith(dir, "solver_time_limit: yes\n"); },
-              "solver_time_limit");
+  expectError([&] { loadWith(dir, "solver_time_limit: yes\n"); }, "solver_time_limit");
 }
 
 TEST(Config, KannalaBrandtCamera) {
@@ -354,8 +346,7 @@ TEST(Config, WrongMatrixSizeNamesTheLine) {
   TempDir dir;
   const auto path = writeConfig(dir, replace(kConfig, "rows: 4", "rows: 3"), kCamera);
   expectError([&] { loadConfig(path); }, "cfg.yaml:7: key 'body_T_cam0': expected a 4x4 matrix");
-  const auto path2 =
-      writeConfig(dir, replace(kConfig, "0, 0, 0, 1]", "0, 0, 1]"), kCamera);
+  const auto path2 = writeConfig(dir, replace(kConfig, "0, 0, 0, 1]", "0, 0, 1]"), kCamera);
   expectError([&] { loadConfig(path2); }, "got rows 4, cols 4, 15 values");
 }
 
@@ -381,18 +372,16 @@ TEST(Config, TrackerImageKeys) {
   EXPECT_DOUBLE_EQ(plain.tracker.stereo_epipolar_px, 2.0);
   EXPECT_FALSE(plain.tracker.stereo_refine);
   const Config set = loadConfig(writeConfig(
-      dir, std::string(kConfig) + "equalize: 1\nstereo_gain_compensation: 0\nstereo_epipolar_px: 1.0\nstereo_refine: 1\n",
+      dir,
+      std::string(kConfig) + "equalize: 1\nstereo_gain_compensation: 0\nstereo_epipolar_px: 1.0\nstereo_refine: 1\n",
       kCamera));
   EXPECT_TRUE(set.tracker.equalize);
   EXPECT_FALSE(set.tracker.stereo_gain_compensation);
   EXPECT_DOUBLE_EQ(set.tracker.stereo_epipolar_px, 1.0);
   EXPECT_TRUE(set.tracker.stereo_refine);
-  expectError([&] { loadWith(dir, "stereo_refine: yes\n"); },
-              "stereo_refine");
-  expectError([&] { loadWith(dir, "stereo_epipolar_px: 0\n"); },
-              "stereo_epipolar_px");
-  expectError([&] { loadWith(dir, "equalize: clahe\n"); },
-              "equalize");
+  expectError([&] { loadWith(dir, "stereo_refine: yes\n"); }, "stereo_refine");
+  expectError([&] { loadWith(dir, "stereo_epipolar_px: 0\n"); }, "stereo_epipolar_px");
+  expectError([&] { loadWith(dir, "equalize: clahe\n"); }, "equalize");
   const Config euroc = loadConfig(std::string(IDYVINS_SOURCE_DIR) + "/config/euroc/euroc_stereo_imu_config.yaml");
   EXPECT_TRUE(euroc.tracker.equalize) << "measured on the real excerpt (test_frontend)";
   EXPECT_DOUBLE_EQ(euroc.tracker.stereo_epipolar_px, 1.0);
@@ -447,16 +436,14 @@ TEST(Config, EstimatedAnchorRaysNeedAFixedTimeOffset) {
 TEST(Config, ImuSpikesMustBeShorterThanTheLargestImuGap) {
   TempDir dir;
   const Config c = loadWith(dir, "imu_spike_acc: 80\nimu_spike_max_ms: 30\n");
-  EXPECT_DOUBLE_EQ(c.imu_spike.acc_mps2, 80.0);
-  EXPECT_DOUBLE_EQ(c.imu_spike.max_ms, 30.0);
-  EXPECT_DOUBLE_EQ(loadConfig(writeConfig(dir, kConfig, kCamera)).imu_spike.max_ms, 50.0);
-  EXPECT_DOUBLE_EQ(loadWith(dir, "imu_spike_max_ms: 0\n").imu_spike.max_ms, 0.0);
+  EXPECT_DOUBLE_EQ(c.imu.spike.acc_mps2, 80.0);
+  EXPECT_DOUBLE_EQ(c.imu.spike.max_ms, 30.0);
+  EXPECT_DOUBLE_EQ(loadConfig(writeConfig(dir, kConfig, kCamera)).imu.spike.max_ms, 50.0);
+  EXPECT_DOUBLE_EQ(loadWith(dir, "imu_spike_max_ms: 0\n").imu.spike.max_ms, 0.0);
   expectError([&] { loadWith(dir, "imu_spike_max_ms: 150\n"); },
               "imu_spike_max_ms (150) must be below max_imu_gap (100 ms): a dropped spike leaves a gap to bridge");
-  expectError([&] { loadWith(dir, "max_imu_gap: 0.04\n"); },
-              "imu_spike_max_ms (50) must be below max_imu_gap (40 ms)");
-  expectError([&] { loadWith(dir, "imu_spike_gyr: -1\n"); },
-              "key 'imu_spike_gyr': expected");
+  expectError([&] { loadWith(dir, "max_imu_gap: 0.04\n"); }, "imu_spike_max_ms (50) must be below max_imu_gap (40 ms)");
+  expectError([&] { loadWith(dir, "imu_spike_gyr: -1\n"); }, "key 'imu_spike_gyr': expected");
 }
 
 TEST(Config, TrackDropoutIsAShareOfAThousand) {
@@ -486,9 +473,12 @@ TEST(Config, FuzzFindingsAreRefusedWithOneClearError) {
   for (const auto& e : std::filesystem::directory_iterator(IDYVINS_SOURCE_DIR "/tests/fuzz/regressions")) {
     const std::string name = e.path().filename().string(), path = e.path().string();
     SCOPED_TRACE(name);
-    if (name.rfind("camera_", 0) == 0) EXPECT_THROW(loadCameraFile(path), InputError);
-    else if (name.rfind("config_", 0) == 0) EXPECT_THROW(loadConfig(path), InputError);
-    else continue;
+    if (name.rfind("camera_", 0) == 0)
+      EXPECT_THROW(loadCameraFile(path), InputError);
+    else if (name.rfind("config_", 0) == 0)
+      EXPECT_THROW(loadConfig(path), InputError);
+    else
+      continue;
     ++replayed;
   }
   EXPECT_GE(replayed, 1);

@@ -4,10 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <cstdio>
 #include <cstdlib>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 
 #include "frontend/corner_detector.h"
@@ -29,7 +29,8 @@ cv::Mat circleMask(cv::Size size, int n, int r, unsigned seed) {
 }
 
 cv::Mat realImage() {
-  const std::string path = std::string(IDYVINS_SHARED_DATA) + "/euroc_v101_micro/mav0/cam0/data/1403715273262142976.png";
+  const std::string path =
+      std::string(IDYVINS_SHARED_DATA) + "/euroc_v101_micro/mav0/cam0/data/1403715273262142976.png";
   return cv::imread(path, cv::IMREAD_GRAYSCALE);
 }
 

@@ -44,8 +44,7 @@ TEST(Csv, BadInputGivesFileLineAndExpectation) {
   writeFile(dir / "header.csv", "#t,x\n");
   expectError([&] { readTable(dir / "header.csv", {',', 2, 2}); }, "header.csv: no data rows");
   writeFile(dir / "cols.csv", "#t,x\n1,2\n3\n");
-  expectError([&] { readTable(dir / "cols.csv", {',', 2, 2}); },
-              "cols.csv:3: expected 2 columns, got 1");
+  expectError([&] { readTable(dir / "cols.csv", {',', 2, 2}); }, "cols.csv:3: expected 2 columns, got 1");
 }
 
 TEST(Csv, NumberParsing) {
@@ -61,10 +60,8 @@ TEST(Csv, NumberParsing) {
 
 TEST(Csv, TimeOrder) {
   EXPECT_NO_THROW(checkIncreasing({1, 2, 3}, {2, 3, 4}, "f"));
-  expectError([] { checkIncreasing({1, 2, 2}, {2, 3, 4}, "f.csv"); },
-              "f.csv:4: duplicate time stamp 2");
-  expectError([] { checkIncreasing({1, 5, 3}, {2, 3, 4}, "f.csv"); },
-              "f.csv:4: non-increasing time stamp 3");
+  expectError([] { checkIncreasing({1, 2, 2}, {2, 3, 4}, "f.csv"); }, "f.csv:4: duplicate time stamp 2");
+  expectError([] { checkIncreasing({1, 5, 3}, {2, 3, 4}, "f.csv"); }, "f.csv:4: non-increasing time stamp 3");
 }
 
 }  // namespace

@@ -180,9 +180,9 @@ TEST(Elimination, StaticNoisyTracksHaveCvNearSqrt2AndAreKept) {
 }
 
 TEST(CandidateWeight, InformationIsOneOverMFlooredAtOnePixel) {
-  EXPECT_DOUBLE_EQ(candidateInformation(4.0), 0.25);   // residual scaled by 1/2
+  EXPECT_DOUBLE_EQ(candidateInformation(4.0), 0.25);  // residual scaled by 1/2
   EXPECT_DOUBLE_EQ(candidateInformation(25.0), 0.04);
-  EXPECT_DOUBLE_EQ(candidateInformation(0.3), 1.0);    // floor: never above the static weight
+  EXPECT_DOUBLE_EQ(candidateInformation(0.3), 1.0);  // floor: never above the static weight
   EXPECT_DOUBLE_EQ(candidateInformation(0.0), 1.0);
 }
 
@@ -395,7 +395,8 @@ TEST(StereoMotionTest, StaticPointsGiveZeroAndNoiseGivesFourDof) {
     EXPECT_LT(exact.chi2, 1e-6);
     EXPECT_NEAR(exact.depth, p_prev.z(), 1e-6 * p_prev.z());
     auto nz = [&](const Vector2d& x) { return Vector2d(x + Vector2d(noise(rng), noise(rng))); };
-    const StereoMotionError e = stereoMotionError(nz(a.l), nz(a.r), nz(b.l), nz(b.r), T_r_l, m.R, m.t, 0.0, kF, sigma_px);
+    const StereoMotionError e =
+        stereoMotionError(nz(a.l), nz(a.r), nz(b.l), nz(b.r), T_r_l, m.R, m.t, 0.0, kF, sigma_px);
     if (!e.valid) continue;
     sum += e.chi2;
     above += e.chi2 > 18.47;
@@ -583,7 +584,7 @@ TEST(IdyFilter, StereoTestMarksOnFirstFailureAndRemovesOnSecond) {
   EXPECT_EQ(filter.lastStats().stereo_eliminated, 1u);
   EXPECT_GT(feats[0].stereo_chi2, 80.0);  // clear: removed at its second failure even with remove_chi2 80
   frameItems(feats, items);
-  run_copy(keeps);  // a third consecutive failure persists: removed whatever its χ²
+  run_copy(keeps);                                   // a third consecutive failure persists: removed whatever its χ²
   ASSERT_EQ(high_bar.stereo.persistent_strikes, 3);  // the default
   EXPECT_TRUE(copy_items[0].remove);
   EXPECT_EQ(keeps.lastStats().stereo_eliminated, 1u);
@@ -671,8 +672,7 @@ struct LineOfSightResult {
   int static_removed = 0;
 };
 
-LineOfSightResult runLineOfSight(const LineOfSightScene& scene, int anchor_frames, double noise_ref,
-                                 double noise_px) {
+LineOfSightResult runLineOfSight(const LineOfSightScene& scene, int anchor_frames, double noise_ref, double noise_px) {
   const auto cam = pinholeCamera();
   const auto T_r_l = rightFromLeft();
   const frontend::MotionPrior prior = forwardPrior(scene.camera_step, 1e-8);
@@ -768,7 +768,7 @@ TEST(IdyFilter, AFarTruckAlongTheLineOfSightNeedsTheLongAnchor) {
 TEST(StereoNoiseScale, QuantileOverTheReferenceNeverBelowOne) {
   std::vector<double> chi2(101);
   for (std::size_t i = 0; i < chi2.size(); ++i) chi2[100 - i] = 0.01 * static_cast<double>(i);  // 0 … 1, reversed
-  EXPECT_NEAR(stereoNoiseScale(chi2, 0.25, 0.1), 2.5, 1e-12);  // 25 % quantile 0.25
+  EXPECT_NEAR(stereoNoiseScale(chi2, 0.25, 0.1), 2.5, 1e-12);                                   // 25 % quantile 0.25
   EXPECT_NEAR(stereoNoiseScale(chi2, 0.5, 0.1), 5.0, 1e-12);
   EXPECT_DOUBLE_EQ(stereoNoiseScale(chi2, 0.25, 0.5), 1.0);  // quiet frame: never below 1
   EXPECT_DOUBLE_EQ(stereoNoiseScale(chi2, 0.25, 0.0), 1.0);  // 0 = off
@@ -848,8 +848,9 @@ TEST(IdyFilter, NoiseScaleHoldsTheFalseAlarmRateOnHeavyTailedTracks) {
   double scale_fixed = 0, scale_scaled = 0;
   runFrames(0.0, car_fixed, static_fixed, scale_fixed);
   runFrames(StereoMotionOptions{}.noise_ref, car_scaled, static_scaled, scale_scaled);
-  std::printf("fixed sigma: %d static removed, car at frame %d; noise scale (mean %.2f): %d static removed, car at %d\n",
-              static_fixed, car_fixed, scale_scaled, static_scaled, car_scaled);
+  std::printf(
+      "fixed sigma: %d static removed, car at frame %d; noise scale (mean %.2f): %d static removed, car at %d\n",
+      static_fixed, car_fixed, scale_scaled, static_scaled, car_scaled);
   EXPECT_DOUBLE_EQ(scale_fixed, 1.0);
   EXPECT_GT(scale_scaled, 1.5);
   EXPECT_GE(static_fixed, 5);
@@ -910,7 +911,7 @@ TEST(IdyFilter, PointsBeyondTheMinimumDisparityAreNotJudged) {
   EXPECT_TRUE(all[0]);
   EXPECT_TRUE(all[1]);  // judged: the far car fails too
   EXPECT_TRUE(gated[0]);
-  EXPECT_FALSE(gated[1]);  // beyond the minimum disparity: not judged
+  EXPECT_FALSE(gated[1]);                                // beyond the minimum disparity: not judged
   EXPECT_GT(chi2_gated[1], StereoMotionOptions{}.chi2);  // but its χ² is reported
   for (std::size_t i = 2; i < all.size(); ++i) {
     EXPECT_FALSE(all[i]) << i;

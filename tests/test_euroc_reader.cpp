@@ -13,8 +13,8 @@ namespace idyvins::io {
 namespace {
 
 namespace fs = std::filesystem;
-using test::sharedData;
 using test::expectError;
+using test::sharedData;
 using test::TempDir;
 using test::writeFile;
 
@@ -152,8 +152,7 @@ TEST_F(TinyEuroc, WrongColumnCount) {
 
 TEST_F(TinyEuroc, NonNumericAndNonFinite) {
   writeImu("#t\n1000,0,0,0,0,0,9.8\n1010,0,zero,0,0,0,9.8\n");
-  expectError([&] { readEurocDataset(root); },
-              "imu0/data.csv:3: column 3: expected a number, got 'zero'");
+  expectError([&] { readEurocDataset(root); }, "imu0/data.csv:3: column 3: expected a number, got 'zero'");
   writeImu("#t\n1000,0,0,0,0,0,9.8\n1010,0,0,0,nan,0,9.8\n");
   expectError([&] { readEurocDataset(root); }, "imu0/data.csv:3: column 5: expected a finite number");
   writeImu("#t\n1000,0,0,0,0,0,9.8\n1010,0,0,0,0,inf,9.8\n");
@@ -209,7 +208,7 @@ TEST(PairByTime, NearestWithinTolerance) {
   std::vector<std::size_t> u0, u1;
   pairByTime(rec({100, 200, 300}), rec({98, 105, 203, 900}), 10, pairs, u0, u1);
   ASSERT_EQ(pairs.size(), 2u);  // 300 has no partner within 10 ns
-  EXPECT_EQ(pairs[0].i1, 0u);  // |100-98| < |100-105|
+  EXPECT_EQ(pairs[0].i1, 0u);   // |100-98| < |100-105|
   EXPECT_EQ(pairs[1].i1, 2u);
   ASSERT_EQ(u0.size(), 1u);
   EXPECT_EQ(u0[0], 2u);

@@ -149,9 +149,9 @@ TEST(DynamicClassification, HandCountedCase) {
   // Track 4: static, 4 observations, confirmed dynamic by mistake -> 4 false positives.
   // Track 5: static background, 5 observations, the last one on a vehicle's edge; in the static map.
   // Track 6: mostly on a vehicle (2 of 3), never flagged; in the static map.
-  std::vector<MaskedObservation> obs = {{1, true, false}, {1, true, false}, {1, true, true},  {2, true, false},
-                                        {2, true, false}, {3, true, false}, {4, false, false}, {4, false, false},
-                                        {4, false, false}, {4, false, false}, {6, true, false}, {6, true, false},
+  std::vector<MaskedObservation> obs = {{1, true, false},  {1, true, false},  {1, true, true},   {2, true, false},
+                                        {2, true, false},  {3, true, false},  {4, false, false}, {4, false, false},
+                                        {4, false, false}, {4, false, false}, {6, true, false},  {6, true, false},
                                         {6, false, false}};
   for (int k = 0; k < 4; ++k) obs.push_back({5, false, false});
   obs.push_back({5, true, false});

@@ -167,7 +167,8 @@ TEST(ProjectionFactorsRay, JacobiansMatchNumericAndTheRayAtTheObservationGivesTh
     const double* ray_params[] = {s.pose_i.data(), s.pose_j.data(), lm.data()};
     const double* fixed_params[] = {s.pose_i.data(), s.pose_j.data(), &s.inv_depth};
     ASSERT_TRUE(two.Evaluate(ray_params, r_ray.data(), nullptr));
-    ASSERT_TRUE(ProjectionTwoFrame(s.xy_i, s.xy_j_right, s.ex0, s.ex1, w).Evaluate(fixed_params, r_fixed.data(), nullptr));
+    ASSERT_TRUE(
+        ProjectionTwoFrame(s.xy_i, s.xy_j_right, s.ex0, s.ex1, w).Evaluate(fixed_params, r_fixed.data(), nullptr));
     EXPECT_LT((r_ray - r_fixed).norm(), 1e-12);
     ASSERT_TRUE(anchor.Evaluate(a_params, r.data(), nullptr));
     EXPECT_LT(r.norm(), 1e-12);
@@ -222,11 +223,10 @@ TEST(ProjectionFactors, ResidualIsTheNormalizedReprojectionErrorInPixels) {
   const double* params[] = {s.pose_i.data(), s.pose_j.data(), &s.inv_depth};
   Vector2d r;
   ASSERT_TRUE(f.Evaluate(params, r.data(), nullptr));
-  const Vector3d p = transferPoint({s.xy_i.x(), s.xy_i.y(), 1}, s.inv_depth,
-                                   Eigen::Map<const Vector3d>(s.pose_i.data()),
-                                   Eigen::Map<const Quaterniond>(s.pose_i.data() + 3),
-                                   Eigen::Map<const Vector3d>(s.pose_j.data()),
-                                   Eigen::Map<const Quaterniond>(s.pose_j.data() + 3), s.ex0, s.ex0);
+  const Vector3d p =
+      transferPoint({s.xy_i.x(), s.xy_i.y(), 1}, s.inv_depth, Eigen::Map<const Vector3d>(s.pose_i.data()),
+                    Eigen::Map<const Quaterniond>(s.pose_i.data() + 3), Eigen::Map<const Vector3d>(s.pose_j.data()),
+                    Eigen::Map<const Quaterniond>(s.pose_j.data() + 3), s.ex0, s.ex0);
   EXPECT_LT((r - 460.0 / 1.5 * (p.head<2>() / p.z() - s.xy_j)).norm(), 1e-9);
 }
 

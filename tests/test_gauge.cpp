@@ -19,7 +19,8 @@ double yawOf(const Eigen::Matrix3d& R) { return std::atan2(R(1, 0), R(0, 0)); }
 TEST(Gauge, UndoesAYawRotationAndTranslationOfTheWholeWindow) {
   // A window of three poses, moved rigidly by a yaw of 0.3 rad and a translation.
   const Eigen::Quaterniond q0 = Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d(0.2, -0.3, 1).normalized()));
-  const Eigen::Isometry3d before[3] = {pose(q0, {1, 2, 3}), pose(q0 * Eigen::Quaterniond(0.99, 0.1, 0, 0).normalized(), {2, 2, 3.5}),
+  const Eigen::Isometry3d before[3] = {pose(q0, {1, 2, 3}),
+                                       pose(q0 * Eigen::Quaterniond(0.99, 0.1, 0, 0).normalized(), {2, 2, 3.5}),
                                        pose(q0, {3, 1, 3})};
   Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
   M.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -35,7 +36,8 @@ TEST(Gauge, UndoesAYawRotationAndTranslationOfTheWholeWindow) {
 TEST(Gauge, KeepsRollAndPitchAsOptimized) {
   // The solve tilted the oldest frame by 2 degrees about x and turned it by 0.1 rad in yaw:
   // the correction restores the yaw and the position, not the tilt (gravity makes it observable).
-  const Eigen::Isometry3d before = pose(Eigen::Quaterniond(Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitZ())), {5, -1, 2});
+  const Eigen::Isometry3d before =
+      pose(Eigen::Quaterniond(Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitZ())), {5, -1, 2});
   const Eigen::Quaterniond tilt(Eigen::AngleAxisd(2.0 * M_PI / 180.0, Eigen::Vector3d::UnitX()));
   const Eigen::Quaterniond turn(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()));
   const Eigen::Isometry3d after = pose(turn * tilt * Eigen::Quaterniond(before.linear()), {5.3, -0.8, 2.1});

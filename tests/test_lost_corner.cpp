@@ -25,12 +25,11 @@ TEST(LostCornerTest, LostNewCornersAwayFromTheirStaticPredictionAreJudgedMoving)
   // its new corners are lost in their second frame. Static corners lost at the same time
   // (leaving the image, hidden by the truck) must mostly be found where the prior puts them
   // or be recognised as hidden (something nearer stands there now).
-  const sim::Scene scene =
-      crossingVehicleScene(3.0, "truck", Vector3d(8.0, 2.5, 3.0), Vector3d(9.0, -30.0, 0.0), 20.0);
+  const sim::Scene scene = crossingVehicleScene(3.0, "truck", Vector3d(8.0, 2.5, 3.0), Vector3d(9.0, -30.0, 0.0), 20.0);
   for (const bool judge : {true, false}) {
     const Config& rig = scene.rig();
     frontend::TrackerParams params = rig.tracker;
-    params.judge_lost_new_tracks = judge;
+    params.lost_track_test = judge;
     frontend::FeatureTracker tracker(rig.rig(), params);
     // The IDY filter as the judge of lost corners only: no elimination, no marking, no
     // stereo motion test (the tracks stay those of the tracker alone).
@@ -65,9 +64,10 @@ TEST(LostCornerTest, LostNewCornersAwayFromTheirStaticPredictionAreJudgedMoving)
       }
       prev = f;
     }
-    std::printf("judge %d: new corners lost in their second frame: %zu on the car (%zu judged moving), %zu static "
-                "(%zu judged moving); %zu tested\n",
-                judge, lost_vehicle, judged_vehicle, lost_static, judged_static, tested);
+    std::printf(
+        "judge %d: new corners lost in their second frame: %zu on the car (%zu judged moving), %zu static "
+        "(%zu judged moving); %zu tested\n",
+        judge, lost_vehicle, judged_vehicle, lost_static, judged_static, tested);
     if (!judge) {
       EXPECT_EQ(judged_vehicle + judged_static + tested, 0u);
       continue;

@@ -1,11 +1,11 @@
 // Saved maps: save -> load is exact; damaged, foreign and other-version maps are one InputError.
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <random>
-#include <unistd.h>
 
 #include "core/error.h"
 #include "map/map_io.h"

@@ -21,8 +21,7 @@ using Eigen::Vector3d;
 /// Linear factor r = W (Σ_k s_k x_k − z) over 3-vectors, s_k = ±1.
 class LinearFactor final : public ceres::CostFunction {
  public:
-  LinearFactor(std::vector<double> signs, Vector3d z, Eigen::Matrix3d W)
-      : signs_(std::move(signs)), z_(z), W_(W) {
+  LinearFactor(std::vector<double> signs, Vector3d z, Eigen::Matrix3d W) : signs_(std::move(signs)), z_(z), W_(W) {
     for (std::size_t k = 0; k < signs_.size(); ++k) mutable_parameter_block_sizes()->push_back(3);
     set_num_residuals(3);
   }
@@ -152,8 +151,8 @@ void buildWindow(Window& w) {
   std::vector<imu::NavState> truth(Window::kFrames);
   truth[0].v_w = Vector3d(1.5, 0.2, 0.1);
   for (int i = 0; i + 1 < Window::kFrames; ++i) {
-    auto p = std::make_unique<imu::Preintegration>(Vector3d(0.2, 0, 9.81), Vector3d(0, 0, 0.2),
-                                                   Vector3d::Zero(), Vector3d::Zero(), noise);
+    auto p = std::make_unique<imu::Preintegration>(Vector3d(0.2, 0, 9.81), Vector3d(0, 0, 0.2), Vector3d::Zero(),
+                                                   Vector3d::Zero(), noise);
     for (int k = 0; k < 20; ++k) p->push(0.005, Vector3d(0.2, 0, 9.81) + r3(0.3), Vector3d(0, 0, 0.2) + r3(0.05));
     truth[i + 1] = p->predict(truth[i]);
     w.pre.push_back(std::move(p));
@@ -191,13 +190,13 @@ void buildWindow(Window& w) {
         const Vector3d pj = transferPoint(pts_i, 1.0 / p_c.z(), ta.p_w_b, ta.q_w_b, tj.p_w_b, tj.q_w_b, w.ex0, w.ex0);
         const Vector2d obs = pj.head<2>() / pj.z() + 0.005 * Vector2d(g(rng), g(rng));
         lm.factors.push_back(std::make_shared<ProjectionTwoFrame>(pts_i.head<2>(), obs, w.ex0, w.ex0,
-                                                                         ProjectionWeight{460.0, 1.5, nullptr}));
+                                                                  ProjectionWeight{460.0, 1.5, nullptr}));
         lm.frames.push_back(j);
       }
       const Vector3d pr = transferPoint(pts_i, 1.0 / p_c.z(), ta.p_w_b, ta.q_w_b, ta.p_w_b, ta.q_w_b, w.ex0, w.ex1);
-      lm.stereo = std::make_shared<ProjectionOneFrameTwoCam>(
-          pts_i.head<2>(), pr.head<2>() / pr.z() + 0.005 * Vector2d(g(rng), g(rng)), w.ex0, w.ex1,
-          ProjectionWeight{460.0, 1.5, nullptr});
+      lm.stereo = std::make_shared<ProjectionOneFrameTwoCam>(pts_i.head<2>(),
+                                                             pr.head<2>() / pr.z() + 0.005 * Vector2d(g(rng), g(rng)),
+                                                             w.ex0, w.ex1, ProjectionWeight{460.0, 1.5, nullptr});
       w.landmarks.push_back(std::move(lm));
     }
   }
@@ -212,8 +211,8 @@ void addStates(ceres::Problem& problem, Window& w, int first) {
 
 void addLandmark(ceres::Problem& problem, Window& w, Window::Landmark& lm) {
   for (std::size_t k = 0; k < lm.factors.size(); ++k)
-    problem.AddResidualBlock(lm.factors[k].get(), w.huber.get(), w.pose[lm.anchor].data(),
-                             w.pose[lm.frames[k]].data(), &lm.inv_depth);
+    problem.AddResidualBlock(lm.factors[k].get(), w.huber.get(), w.pose[lm.anchor].data(), w.pose[lm.frames[k]].data(),
+                             &lm.inv_depth);
   problem.AddResidualBlock(lm.stereo.get(), w.huber.get(), &lm.inv_depth);
 }
 
@@ -224,10 +223,14 @@ TEST(Marginalization, ScaledInformationScalesTheCostAndKeepsTheMinimum) {
   auto r3 = [&]() -> Vector3d { return Vector3d(g(rng), g(rng), g(rng)); };
   Vector3d a = r3(), b = r3();
   Marginalizer marg;
-  marg.add({std::make_shared<LinearFactor>(std::vector<double>{1}, r3(), Eigen::Matrix3d::Identity()), nullptr,
-            {a.data()}, {0}});
+  marg.add({std::make_shared<LinearFactor>(std::vector<double>{1}, r3(), Eigen::Matrix3d::Identity()),
+            nullptr,
+            {a.data()},
+            {0}});
   marg.add({std::make_shared<LinearFactor>(std::vector<double>{-1, 1}, r3(), 2.0 * Eigen::Matrix3d::Identity()),
-            nullptr, {a.data(), b.data()}, {0}});
+            nullptr,
+            {a.data(), b.data()},
+            {0}});
   auto full = std::make_shared<MarginalizationPrior>(marg.marginalize());
   auto faded = std::make_shared<MarginalizationPrior>(*full);
   faded->scaleInformation(0.3);
@@ -262,8 +265,8 @@ TEST(Marginalization, VisualInertialWindowReSolvesToTheFullEstimate) {
   addStates(full, w, 0);
   full.AddResidualBlock(w.pose0_prior.get(), nullptr, w.pose[0].data());
   for (int i = 0; i + 1 < Window::kFrames; ++i)
-    full.AddResidualBlock(w.imu_factors[i].get(), nullptr, w.pose[i].data(), w.sb[i].data(),
-                          w.pose[i + 1].data(), w.sb[i + 1].data());
+    full.AddResidualBlock(w.imu_factors[i].get(), nullptr, w.pose[i].data(), w.sb[i].data(), w.pose[i + 1].data(),
+                          w.sb[i + 1].data());
   for (auto& lm : w.landmarks) addLandmark(full, w, lm);
   ceres::Solver::Summary summary;
   ceres::Solve(tightOptions(), &full, &summary);
@@ -303,8 +306,8 @@ TEST(Marginalization, VisualInertialWindowReSolvesToTheFullEstimate) {
   addStates(reduced, w, 1);
   reduced.AddResidualBlock(&prior_factor, nullptr, prior->blocks);
   for (int i = 1; i + 1 < Window::kFrames; ++i)
-    reduced.AddResidualBlock(w.imu_factors[i].get(), nullptr, w.pose[i].data(), w.sb[i].data(),
-                             w.pose[i + 1].data(), w.sb[i + 1].data());
+    reduced.AddResidualBlock(w.imu_factors[i].get(), nullptr, w.pose[i].data(), w.sb[i].data(), w.pose[i + 1].data(),
+                             w.sb[i + 1].data());
   for (auto& lm : w.landmarks)
     if (lm.anchor == 1) addLandmark(reduced, w, lm);
   ceres::Solve(tightOptions(), &reduced, &summary);

@@ -1,12 +1,11 @@
 // io::OutputFolder: results staged and swapped in whole, and nothing idyvins did not write
 // ever removed: the dataset, a parent of it, a folder with foreign files, a read-only folder.
 
-#include "io/output_folder.h"
-
 #include <gtest/gtest.h>
 
 #include <filesystem>
 
+#include "io/output_folder.h"
 #include "test_util.h"
 
 namespace {
@@ -58,7 +57,7 @@ TEST(OutputFolder, AnEarlierRunIsReplacedWhole) {
     f.publish();
   }
   EXPECT_EQ(readFile(tmp / "out/trajectory.tum"), "two");
-  EXPECT_FALSE(fs::exists(tmp / "out/sub/a.csv"));  // the earlier run's file, not written this time
+  EXPECT_FALSE(fs::exists(tmp / "out/sub/a.csv"));          // the earlier run's file, not written this time
   for (const auto& e : fs::directory_iterator(tmp.path()))  // no OUT.old-PID left behind
     EXPECT_EQ(e.path().filename(), "out");
 }
@@ -66,7 +65,8 @@ TEST(OutputFolder, AnEarlierRunIsReplacedWhole) {
 TEST(OutputFolder, AFolderWithForeignFilesIsRefusedBeforeAnythingIsWritten) {
   TempDir tmp;
   writeFile(tmp / "out/notes.txt", "mine");
-  expectError([&] { OutputFolder f(tmp / "out", runOptions()); }, "holds 1 file(s) idyvins run did not write ('notes.txt')");
+  expectError([&] { OutputFolder f(tmp / "out", runOptions()); },
+              "holds 1 file(s) idyvins run did not write ('notes.txt')");
   EXPECT_EQ(readFile(tmp / "out/notes.txt"), "mine");
   // An earlier run with a foreign file added to it is not the tool's alone either.
   writeRun(tmp / "run", "one", runOptions());

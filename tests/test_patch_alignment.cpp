@@ -189,8 +189,8 @@ TEST(MatchShape, IdentityOnACornerStretchedAlongAnEdgeAndIdentityOffTheImage) {
   // A cap of 10 holds; the window off the image, a flat patch or a wrong type: identity.
   EXPECT_NEAR(matchShape(edge, {30, 30}, 7, 10.0)(0, 0), 10.0, 1e-6);
   EXPECT_TRUE(matchShape(edge, {5, 30}, 7, 100.0).isApprox(Eigen::Matrix2d::Identity()));
-  EXPECT_TRUE(matchShape(cv::Mat(60, 60, CV_8UC1, cv::Scalar(90)), {30, 30}, 7, 100.0)
-                  .isApprox(Eigen::Matrix2d::Identity()));
+  EXPECT_TRUE(
+      matchShape(cv::Mat(60, 60, CV_8UC1, cv::Scalar(90)), {30, 30}, 7, 100.0).isApprox(Eigen::Matrix2d::Identity()));
   cv::Mat as_float;
   edge.convertTo(as_float, CV_32F);
   EXPECT_TRUE(matchShape(as_float, {30, 30}, 7, 100.0).isApprox(Eigen::Matrix2d::Identity()));

@@ -3,21 +3,19 @@
 
 #include <gtest/gtest.h>
 
-#include <set>
-
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
-
-#include <algorithm>
-#include <cmath>
+#include <set>
 #include <sstream>
 
+#include "config/modes.h"
 #include "core/error.h"
 #include "eval/trajectory_metrics.h"
 #include "pipeline/front_end.h"
-#include "pipeline/modes.h"
 #include "pipeline/observers.h"
 #include "pipeline/outputs.h"
 #include "pipeline/stereo_sync.h"
@@ -52,9 +50,9 @@ struct SceneRun {
   eval::DynamicClassification classification;
   std::vector<StampedPose> truth;
   std::size_t observed_frames = 0, outputs_with_pose = 0;
-  std::size_t polled = 0;  ///< frames System::poll() processed
+  std::size_t polled = 0;                          ///< frames System::poll() processed
   std::vector<backend::MapPoint> streamed_static;  ///< FrameOutput::new_static_points, in order
-  std::size_t keyframes_left = 0;  ///< FrameResult::left_window events
+  std::size_t keyframes_left = 0;                  ///< FrameResult::left_window events
   std::set<std::pair<TimeNs, std::uint64_t>> left_static, left_not_static;
 };
 
@@ -155,8 +153,8 @@ TEST(PipelineSystem, ShortImuSpikesWithinTheLimitsAreDroppedAndCounted) {
       for (std::size_t k = start; k < start + 5; ++k) imu[k].acc_b.x() += 100.0;
   };
   const SceneRun gated = runScene(Mode::kBaseline, 4.0, {}, spike);
-  const SceneRun ungated = runScene(Mode::kBaseline, 4.0, {}, spike, false, {},
-                                    [](Config& c) { c.imu_spike.max_ms = 0; });
+  const SceneRun ungated =
+      runScene(Mode::kBaseline, 4.0, {}, spike, false, {}, [](Config& c) { c.imu.spike.max_ms = 0; });
   EXPECT_EQ(clean.result.summary.imu_spikes, 0u);
   EXPECT_EQ(gated.result.summary.imu_spikes, 3u);
   EXPECT_EQ(gated.result.summary.imu_spike_samples, 15u);
@@ -212,9 +210,10 @@ TEST(PipelineSystem, IdyThroughTheLibraryApiTracksTheTruthAndLabelsTheMovingTraf
 TEST(PipelineSystem, BaselineThroughTheLibraryApiFlagsNothing) {
   const SceneRun base = runScene(Mode::kBaseline, 3.0);
   EXPECT_EQ(base.classification.true_positives + base.classification.false_positives, 0u);
-  EXPECT_TRUE(base.result.dynamic_map.empty() ||
-              std::all_of(base.result.dynamic_map.begin(), base.result.dynamic_map.end(),
-                          [](const backend::MapPoint& p) { return p.label == frontend::FeatureLabel::kConfirmedDynamic; }));
+  EXPECT_TRUE(
+      base.result.dynamic_map.empty() ||
+      std::all_of(base.result.dynamic_map.begin(), base.result.dynamic_map.end(),
+                  [](const backend::MapPoint& p) { return p.label == frontend::FeatureLabel::kConfirmedDynamic; }));
   EXPECT_GT(base.result.trajectory.size(), 40u);
 }
 
@@ -296,16 +295,17 @@ struct FaultCheck {
   double worst_excess_m = 0;  ///< largest step between consecutive poses beyond the truth's step
 };
 
-FaultCheck checkFault(const SceneRun& run, TimeNs shift_after = std::numeric_limits<TimeNs>::max(),
-                      TimeNs shift = 0) {
+FaultCheck checkFault(const SceneRun& run, TimeNs shift_after = std::numeric_limits<TimeNs>::max(), TimeNs shift = 0) {
   FaultCheck c;
   const auto& resets = run.result.summary.resets;
   c.resets = resets.size();
   if (!resets.empty()) {
     c.why = resets.front().why;
     c.continued_by = resets.front().continued_by;
-    std::printf("reset at %+.3f s, resumed at %+.3f s, last status %s\n", 1e-9 * static_cast<double>(resets.front().t_ns - kFaultAt),
-                1e-9 * static_cast<double>(resets.front().resumed_t_ns - kFaultAt), run.result.summary.last_status.c_str());
+    std::printf("reset at %+.3f s, resumed at %+.3f s, last status %s\n",
+                1e-9 * static_cast<double>(resets.front().t_ns - kFaultAt),
+                1e-9 * static_cast<double>(resets.front().resumed_t_ns - kFaultAt),
+                run.result.summary.last_status.c_str());
   }
   std::vector<StampedPose> truth = run.truth, est;
   for (auto& g : truth)  // ground truth on the shifted clock (time jump)
@@ -313,8 +313,8 @@ FaultCheck checkFault(const SceneRun& run, TimeNs shift_after = std::numeric_lim
   for (const auto& s : run.result.trajectory) est.push_back(toStampedPose(s));
   c.ate_whole = eval::computeAte(truth, est, eval::AlignMode::kSe3, 1'000'000).stats.rmse;
   auto truthAt = [&](TimeNs t) {
-    const auto it = std::lower_bound(truth.begin(), truth.end(), t,
-                                     [](const StampedPose& p, TimeNs x) { return p.t_ns < x; });
+    const auto it =
+        std::lower_bound(truth.begin(), truth.end(), t, [](const StampedPose& p, TimeNs x) { return p.t_ns < x; });
     return it == truth.end() ? truth.back().p_w_b : it->p_w_b;
   };
   for (std::size_t i = 1; i < est.size(); ++i) {
@@ -353,9 +353,7 @@ TEST(PipelineSystem, LoopClosureKeyframeDatabaseHoldsStaticLandmarksOnly) {
   EXPECT_EQ(run.result.loop_trajectory.size(), run.result.trajectory.size());
 }
 
-TEST(Faults, TheFaultTimeIsInsideTheSequence) {
-  EXPECT_EQ(kFaultAt, sim::SimOptions{}.t0_ns + 4'000'000'000);
-}
+TEST(Faults, TheFaultTimeIsInsideTheSequence) { EXPECT_EQ(kFaultAt, sim::SimOptions{}.t0_ns + 4'000'000'000); }
 
 TEST(Faults, ImuGapOfHalfASecondEndsTheSegmentAndTheNextGoesOnFromTheLastGoodState) {
   const SceneRun run = runScene(Mode::kIdy, kFaultSeqS, RunOptions::twoThreads(), [](std::vector<ImuSample>& imu) {
@@ -411,9 +409,10 @@ TEST(Faults, CamerasAndImuSilentForHalfASecondEndTheSegmentWithoutNaN) {
   const SceneRun run = runScene(
       Mode::kIdy, kFaultSeqS, RunOptions::twoThreads(),
       [](std::vector<ImuSample>& imu) {
-        imu.erase(std::remove_if(imu.begin(), imu.end(),
-                                 [](const ImuSample& s) { return s.t_ns > kFaultAt && s.t_ns < kFaultAt + 500'000'000; }),
-                  imu.end());
+        imu.erase(
+            std::remove_if(imu.begin(), imu.end(),
+                           [](const ImuSample& s) { return s.t_ns > kFaultAt && s.t_ns < kFaultAt + 500'000'000; }),
+            imu.end());
       },
       false, [](StereoFrame& f) { return !(f.t_ns > kFaultAt && f.t_ns < kFaultAt + 500'000'000); });
   const FaultCheck c = checkFault(run);
@@ -457,8 +456,8 @@ const OffsetSequence& offsetSequence() {
 
 struct OffsetRun {
   Result result;
-  std::vector<double> td_s;       ///< the offset after each frame
-  std::vector<TimeNs> frame_t_ns; ///< each frame's time (IMU clock) as output
+  std::vector<double> td_s;        ///< the offset after each frame
+  std::vector<TimeNs> frame_t_ns;  ///< each frame's time (IMU clock) as output
   std::size_t stamp_shift_errors = 0;
 };
 
@@ -534,8 +533,9 @@ TEST(PipelineTimeOffset, AppliesTdAndEstimatesATenMillisecondOffsetWithTheAccura
   EXPECT_GT(ate(ignored), 1.5 * ate(right)) << "a 10 ms offset left in the data costs accuracy";
   EXPECT_TRUE(estimated.result.summary.resets.empty());
 
-  std::printf("10 ms offset: ATE %.4f m with td known, %.4f m ignored, %.4f m estimated (mean of the last 5 s: %.3f ms)\n",
-              ate(right), ate(ignored), ate(estimated), 1e3 * mean_td);
+  std::printf(
+      "10 ms offset: ATE %.4f m with td known, %.4f m ignored, %.4f m estimated (mean of the last 5 s: %.3f ms)\n",
+      ate(right), ate(ignored), ate(estimated), 1e3 * mean_td);
 }
 
 TEST(Modes, EveryModeHasARowAndTheRowsAreThePapersTableI) {
@@ -563,13 +563,13 @@ TEST(Modes, FollowEliminatedKeyEndsEliminatedTracksOnlyWhereTheModeFollowsThem) 
   for (Mode mode : {Mode::kIdy, Mode::kIdyPre, Mode::kIdyBa, Mode::kBaseline}) {
     c.mode = mode;
     const bool follows = traitsOf(mode).follow_eliminated;
-    c.idy.follow_eliminated = true;
-    EXPECT_EQ(optionsFor(c).tracker.keep_following_eliminated, follows) << toString(mode);
-    c.idy.follow_eliminated = false;
+    c.tracker.follow_eliminated = true;
+    EXPECT_EQ(optionsFor(c).tracker.follow_eliminated, follows) << toString(mode);
+    c.tracker.follow_eliminated = false;
     const ModeOptions off = optionsFor(c);
-    EXPECT_FALSE(off.tracker.keep_following_eliminated) << toString(mode);
+    EXPECT_FALSE(off.tracker.follow_eliminated) << toString(mode);
     // The lost-corner test does not depend on it.
-    EXPECT_EQ(off.tracker.judge_lost_new_tracks, follows && c.idy.lost_track_test) << toString(mode);
+    EXPECT_EQ(off.tracker.lost_track_test, follows && c.tracker.lost_track_test) << toString(mode);
   }
 }
 
@@ -731,7 +731,7 @@ TEST(FrontEndDropout, WithheldTracksAreAFixedShareOfTheIds) {
   EXPECT_EQ(all, 100000u);
   EXPECT_NEAR(static_cast<double>(some) / 100000, 0.020, 0.003);
   EXPECT_LT(both, some / 5);  // another seed withholds other tracks (independent: 2 % of them)
-  std::size_t nested = 0;  // a larger share withholds the smaller share's tracks and more
+  std::size_t nested = 0;     // a larger share withholds the smaller share's tracks and more
   for (std::uint64_t id = 0; id < 10000; ++id)
     if (withheldTrack(id, 4, 20)) nested += withheldTrack(id, 4, 300) ? 1 : 1000000;
   EXPECT_GT(nested, 100u);

@@ -106,14 +106,16 @@ double monteCarloSigma(const std::vector<Eigen::Vector3d>& pts, const Eigen::Iso
       const Eigen::Vector3d ray = p - seen_from;
       const double d = ray.norm();
       const Eigen::Vector3d r = ray / d, u = r.unitOrthogonal(), w = r.cross(u);
-      const Eigen::Vector3d noisy = p + r * rng.gaussian(d * d / (f * b)) + u * rng.gaussian(d / f) + w * rng.gaussian(d / f);
+      const Eigen::Vector3d noisy =
+          p + r * rng.gaussian(d * d / (f * b)) + u * rng.gaussian(d / f) + w * rng.gaussian(d / f);
       object.emplace_back(noisy.x(), noisy.y(), noisy.z());
       const Eigen::Vector3d X = T_c_w * p;
       image.emplace_back(X.x() / X.z() + rng.gaussian(1 / f), X.y() / X.z() + rng.gaussian(1 / f));
     }
     cv::Mat rvec, tvec;
     const Eigen::AngleAxisd aa(T_c_w.linear());
-    rvec = (cv::Mat_<double>(3, 1) << aa.axis().x() * aa.angle(), aa.axis().y() * aa.angle(), aa.axis().z() * aa.angle());
+    rvec =
+        (cv::Mat_<double>(3, 1) << aa.axis().x() * aa.angle(), aa.axis().y() * aa.angle(), aa.axis().z() * aa.angle());
     tvec = (cv::Mat_<double>(3, 1) << T_c_w.translation().x(), T_c_w.translation().y(), T_c_w.translation().z());
     cv::solvePnP(object, image, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec, true, cv::SOLVEPNP_ITERATIVE);
     cv::Mat R_cv;

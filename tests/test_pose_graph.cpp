@@ -8,6 +8,7 @@
 #include <random>
 
 #include "jacobian_check.h"
+#include "map/four_dof_edge.h"
 #include "map/loop_closer.h"
 #include "map/pose_graph.h"
 
@@ -35,7 +36,8 @@ TEST(PoseGraph, EdgeJacobiansMatchNumerical) {
   std::uniform_real_distribution<double> u(-1, 1);
   for (int trial = 0; trial < 20; ++trial) {
     const Eigen::Matrix3d tilt = (Eigen::AngleAxisd(0.3 * u(rng), Eigen::Vector3d::UnitY()) *
-                                  Eigen::AngleAxisd(0.3 * u(rng), Eigen::Vector3d::UnitX())).toRotationMatrix();
+                                  Eigen::AngleAxisd(0.3 * u(rng), Eigen::Vector3d::UnitX()))
+                                     .toRotationMatrix();
     const RelativePose4 meas{Eigen::Vector3d(u(rng), u(rng), u(rng)), 0.5 * u(rng)};
     const FourDofEdgeCost cost(meas, tilt, 0.05, 0.01);
     Eigen::Vector3d p_i(u(rng), u(rng), u(rng)), p_j(3 * u(rng), 3 * u(rng), u(rng));
@@ -52,14 +54,20 @@ TEST(PoseGraph, EdgeJacobiansMatchNumerical) {
       cost.Evaluate(ps, out.data(), nullptr);
       return Eigen::VectorXd(out);
     };
-    test::expectJacobianNear(Jpi, test::numericJacobian([&](const Eigen::VectorXd& d) {
-      return residual(p_i + d, yaw_i, p_j, yaw_j); }, 3), 1e-6, "p_i");
-    test::expectJacobianNear(Jyi, test::numericJacobian([&](const Eigen::VectorXd& d) {
-      return residual(p_i, yaw_i + d(0), p_j, yaw_j); }, 1), 1e-6, "yaw_i");
-    test::expectJacobianNear(Jpj, test::numericJacobian([&](const Eigen::VectorXd& d) {
-      return residual(p_i, yaw_i, p_j + d, yaw_j); }, 3), 1e-6, "p_j");
-    test::expectJacobianNear(Jyj, test::numericJacobian([&](const Eigen::VectorXd& d) {
-      return residual(p_i, yaw_i, p_j, yaw_j + d(0)); }, 1), 1e-6, "yaw_j");
+    test::expectJacobianNear(
+        Jpi, test::numericJacobian([&](const Eigen::VectorXd& d) { return residual(p_i + d, yaw_i, p_j, yaw_j); }, 3),
+        1e-6, "p_i");
+    test::expectJacobianNear(
+        Jyi,
+        test::numericJacobian([&](const Eigen::VectorXd& d) { return residual(p_i, yaw_i + d(0), p_j, yaw_j); }, 1),
+        1e-6, "yaw_i");
+    test::expectJacobianNear(
+        Jpj, test::numericJacobian([&](const Eigen::VectorXd& d) { return residual(p_i, yaw_i, p_j + d, yaw_j); }, 3),
+        1e-6, "p_j");
+    test::expectJacobianNear(
+        Jyj,
+        test::numericJacobian([&](const Eigen::VectorXd& d) { return residual(p_i, yaw_i, p_j, yaw_j + d(0)); }, 1),
+        1e-6, "yaw_j");
   }
 }
 

@@ -142,8 +142,7 @@ TEST(Preintegration, CovarianceMatchesMonteCarlo) {
   for (const auto& e : errs) var += (e - mean).cwiseAbs2() / (runs - 1);
   for (int i = 0; i < 15; ++i) {
     const double model = nominal.covariance()(i, i);
-    EXPECT_NEAR(var(i) / model, 1.0, 0.10) << "diagonal entry " << i << ": MC " << var(i)
-                                           << " vs recursion " << model;
+    EXPECT_NEAR(var(i) / model, 1.0, 0.10) << "diagonal entry " << i << ": MC " << var(i) << " vs recursion " << model;
   }
 }
 
@@ -183,13 +182,14 @@ TEST(Preintegration, RealEurocImuAgainstGroundTruth) {
   }
   ASSERT_GT(windows, 350);
   RecordProperty("windows", windows);
-  std::printf("windows %d: rotation < 0.1 deg %d, velocity in 3 sigma %d, position in 3 sigma %d, "
-              "worst rotation %.3f deg\n", windows, rot_ok, vel_ok, pos_ok, worst_rot_deg);
+  std::printf(
+      "windows %d: rotation < 0.1 deg %d, velocity in 3 sigma %d, position in 3 sigma %d, "
+      "worst rotation %.3f deg\n",
+      windows, rot_ok, vel_ok, pos_ok, worst_rot_deg);
   EXPECT_GE(rot_ok, 0.95 * windows);
   EXPECT_GE(vel_ok, 0.95 * windows);
   EXPECT_GE(pos_ok, 0.95 * windows);
-  std::nth_element(normalized_vel.begin(), normalized_vel.begin() + normalized_vel.size() / 2,
-                   normalized_vel.end());
+  std::nth_element(normalized_vel.begin(), normalized_vel.begin() + normalized_vel.size() / 2, normalized_vel.end());
   const double median = normalized_vel[normalized_vel.size() / 2];
   std::printf("median |velocity error| / sigma: %.3f\n", median);
   EXPECT_GT(median, 0.4);

@@ -10,12 +10,12 @@
 #include <opencv2/imgproc.hpp>
 
 #include "camera/camera_model.h"
-#include "imu/preintegration.h"
-#include "io/config.h"
-#include "io/euroc_dataset.h"
-#include "sim/renderer.h"
+#include "config/config.h"
 #include "eval/image_stats.h"
+#include "imu/preintegration.h"
+#include "io/euroc_dataset.h"
 #include "sim/camera_effects.h"
+#include "sim/renderer.h"
 #include "sim/simulator.h"
 #include "test_util.h"
 
@@ -75,7 +75,7 @@ TEST(SimImu, TrajectoryIsDroneLike) {
     }
     EXPECT_GE(vmin, 1.0) << scene;
     EXPECT_LE(vmax, 3.0) << scene;
-    EXPECT_GT(max_tilt, 2.0 * M_PI / 180) << scene;      // some roll/pitch
+    EXPECT_GT(max_tilt, 2.0 * M_PI / 180) << scene;       // some roll/pitch
     EXPECT_GT(max_yaw_rate, 10.0 * M_PI / 180) << scene;  // yaw turns
   }
 }
@@ -190,8 +190,7 @@ TEST(SimScene, TrafficSeedKeepsThePlaceAndChangesTheRun) {
     EXPECT_TRUE(moved) << scene;
     // distinct slots
     for (std::size_t i = 0; i < 4; ++i)
-      for (std::size_t j = i + 1; j < 4; ++j)
-        EXPECT_GT((p5.parked[i].first - p5.parked[j].first).norm(), 2.0) << scene;
+      for (std::size_t j = i + 1; j < 4; ++j) EXPECT_GT((p5.parked[i].first - p5.parked[j].first).norm(), 2.0) << scene;
   }
   SceneOptions garage_block;
   garage_block.scene = "parking_lot";
@@ -214,8 +213,8 @@ TEST(SimValidation, RigAndConfigAreEurocsAndTheImagesDiffer) {
     for (double d : cam.dist) EXPECT_EQ(d, 0.0);
   EXPECT_NEAR((rig.T_b_c[0].translation() - rig.T_b_c[1].translation()).norm(), 0.11, 1e-9);
   EXPECT_GT(Eigen::AngleAxisd(rig.T_b_c[0].linear().transpose() * rig.T_b_c[1].linear()).angle(), 1e-3);
-  EXPECT_DOUBLE_EQ(rig.imu.acc_n, 0.1);
-  EXPECT_DOUBLE_EQ(rig.imu.gyr_w, 0.0001);
+  EXPECT_DOUBLE_EQ(rig.imu.noise.acc_n, 0.1);
+  EXPECT_DOUBLE_EQ(rig.imu.noise.gyr_w, 0.0001);
   // The standard family's rig is unchanged.
   EXPECT_DOUBLE_EQ(rigConfig(standard).cams[0].fx, 380.0);
   // Written and read back as a VINS-Fusion config.
@@ -223,7 +222,7 @@ TEST(SimValidation, RigAndConfigAreEurocsAndTheImagesDiffer) {
   writeVinsConfig(rig, dir.path().string(), "v.yaml");
   const Config back = loadConfig(dir / "v.yaml");
   EXPECT_DOUBLE_EQ(back.cams[1].fy, 456.134);
-  EXPECT_DOUBLE_EQ(back.imu.acc_w, 0.001);
+  EXPECT_DOUBLE_EQ(back.imu.noise.acc_w, 0.001);
   EXPECT_TRUE(back.T_b_c[1].isApprox(rig.T_b_c[1], 1e-9));
   // Other materials: the same scene looks different, with texture everywhere.
   const Scene a(standard), b(validation);
@@ -274,8 +273,8 @@ TEST_F(SimDataset, ShippedSimConfigMatchesTheSimulatorsRig) {
     EXPECT_DOUBLE_EQ(shipped.cams[i].dist[0], written.cams[i].dist[0]);
     EXPECT_TRUE(shipped.T_b_c[i].isApprox(written.T_b_c[i], 1e-12));
   }
-  EXPECT_NEAR(shipped.imu.acc_n, written.imu.acc_n, 1e-6);
-  EXPECT_NEAR(shipped.imu.gyr_w, written.imu.gyr_w, 1e-9);
+  EXPECT_NEAR(shipped.imu.noise.acc_n, written.imu.noise.acc_n, 1e-6);
+  EXPECT_NEAR(shipped.imu.noise.gyr_w, written.imu.noise.gyr_w, 1e-9);
 }
 
 /// Marker corners projected with the written calibration and ground truth, and
@@ -312,7 +311,8 @@ TEST_F(SimDataset, MarkerCornersAppearWhereTheCalibrationPutsThemAndStereoDispar
       if (!cam0->project(p0, uv0) || !cam1->project(p1, uv1)) continue;
       const auto inside = [](const Vector2d& uv) { return uv.x() > 15 && uv.x() < 737 && uv.y() > 15 && uv.y() < 465; };
       if (!inside(uv0) || !inside(uv1)) continue;
-      std::vector<cv::Point2f> pl{cv::Point2f(uv0.x() + 1.2, uv0.y() - 0.8)}, pr{cv::Point2f(uv1.x() - 0.9, uv1.y() + 1.1)};
+      std::vector<cv::Point2f> pl{cv::Point2f(uv0.x() + 1.2, uv0.y() - 0.8)},
+          pr{cv::Point2f(uv1.x() - 0.9, uv1.y() + 1.1)};
       const cv::TermCriteria crit(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-4);
       cv::cornerSubPix(left, pl, cv::Size(4, 4), cv::Size(-1, -1), crit);
       cv::cornerSubPix(right, pr, cv::Size(4, 4), cv::Size(-1, -1), crit);
@@ -341,8 +341,8 @@ TEST_F(SimDataset, MetaCoverageMatchesTheMasks) {
   double sum = 0, mx = 0;
   for (const auto& pair : ds.pairs) {
     const fs::path img(ds.cam0[pair.i0].path);
-    const cv::Mat mask = cv::imread((img.parent_path().parent_path() / "mask" / img.filename()).string(),
-                                    cv::IMREAD_UNCHANGED);
+    const cv::Mat mask =
+        cv::imread((img.parent_path().parent_path() / "mask" / img.filename()).string(), cv::IMREAD_UNCHANGED);
     ASSERT_EQ(mask.type(), CV_8UC1);
     const double f = static_cast<double>(cv::countNonZero(mask)) / mask.total();
     sum += f;
@@ -397,7 +397,8 @@ TEST(SimDepth, DepthImagesHoldTheRenderersDepthAndLeaveTheImagesAlone) {
   const std::string stamp = std::to_string(o.t0_ns);
   for (int c = 0; c < 2; ++c) {
     const fs::path cam = fs::path("mav0") / ("cam" + std::to_string(c));
-    const cv::Mat depth = cv::imread((dir.path() / "depth" / cam / "depth" / (stamp + ".tiff")).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat depth =
+        cv::imread((dir.path() / "depth" / cam / "depth" / (stamp + ".tiff")).string(), cv::IMREAD_UNCHANGED);
     ASSERT_EQ(depth.type(), CV_32FC1) << cam;
     EXPECT_EQ(cv::norm(depth, truth.cam[c].depth, cv::NORM_INF), 0.0) << cam;
     double lo = 0, hi = 0;
@@ -405,7 +406,8 @@ TEST(SimDepth, DepthImagesHoldTheRenderersDepthAndLeaveTheImagesAlone) {
     EXPECT_EQ(lo, 0.0) << "the city's sky";
     EXPECT_GT(hi, 5.0);
     const fs::path image = cam / "data" / (stamp + ".png");
-    EXPECT_EQ(test::readFile((dir.path() / "plain" / image).string()), test::readFile((dir.path() / "depth" / image).string()));
+    EXPECT_EQ(test::readFile((dir.path() / "plain" / image).string()),
+              test::readFile((dir.path() / "depth" / image).string()));
   }
 }
 
@@ -495,7 +497,8 @@ constexpr std::uint64_t kTodayLeftHash = 8175068048370894342ull, kTodayRightHash
 std::uint64_t imageHash(const cv::Mat& m) {
   std::uint64_t h = 1469598103934665603ull;
   for (int y = 0; y < m.rows; ++y)
-    for (int x = 0; x < m.cols * static_cast<int>(m.elemSize()); ++x) h = (h ^ m.ptr<std::uint8_t>(y)[x]) * 1099511628211ull;
+    for (int x = 0; x < m.cols * static_cast<int>(m.elemSize()); ++x)
+      h = (h ^ m.ptr<std::uint8_t>(y)[x]) * 1099511628211ull;
   return h;
 }
 
@@ -658,8 +661,8 @@ TEST(SimRealism, MotionBlurLengthIsImageSpeedTimesExposure) {
   ASSERT_TRUE(cam->project(T_w_c(t + 0.05).inverse() * centre_w, uv_end));
   const Vector2d streak = uv_end - uv_start;
   ASSERT_GT(streak.norm(), 8.0) << "the test needs a clearly visible streak";
-  std::printf("streak %.1f x %.1f px; sharp %dx%d, blurred %dx%d\n", streak.x(), streak.y(), sharp.width,
-              sharp.height, blurred.width, blurred.height);
+  std::printf("streak %.1f x %.1f px; sharp %dx%d, blurred %dx%d\n", streak.x(), streak.y(), sharp.width, sharp.height,
+              blurred.width, blurred.height);
   EXPECT_NEAR(blurred.width - sharp.width, std::abs(streak.x()), 1.5);
   EXPECT_NEAR(blurred.height - sharp.height, std::abs(streak.y()), 1.5);
 }

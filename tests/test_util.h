@@ -13,9 +13,7 @@
 namespace idyvins::test {
 
 /// Path of the shared real datasets (../shared/data).
-inline std::string sharedData(const std::string& rel) {
-  return std::string(IDYVINS_SHARED_DATA) + "/" + rel;
-}
+inline std::string sharedData(const std::string& rel) { return std::string(IDYVINS_SHARED_DATA) + "/" + rel; }
 
 /// A fresh temporary folder removed at the end of the test.
 class TempDir {

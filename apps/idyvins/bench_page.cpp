@@ -17,11 +17,16 @@ namespace {
 std::string escapeHtml(const std::string& s) {
   std::string out;
   for (char c : s) {
-    if (c == '<') out += "&lt;";
-    else if (c == '>') out += "&gt;";
-    else if (c == '&') out += "&amp;";
-    else if (c == '"') out += "&quot;";
-    else out += c;
+    if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else if (c == '&')
+      out += "&amp;";
+    else if (c == '"')
+      out += "&quot;";
+    else
+      out += c;
   }
   return out;
 }
@@ -85,7 +90,8 @@ std::string base64(const std::string& bytes) {
 }
 
 /// One page per sequence: its finished runs side by side. Returns sequence -> link or why none.
-std::map<std::string, std::string> sequencePages(const fs::path& out, const Sweep& sweep, const std::vector<JobResult>& found) {
+std::map<std::string, std::string> sequencePages(const fs::path& out, const Sweep& sweep,
+                                                 const std::vector<JobResult>& found) {
   std::map<std::string, std::vector<std::string>> folders;
   for (std::size_t k = 0; k < found.size(); ++k)
     if (found[k].problem.empty()) folders[sweep.jobs[k].sequence].push_back(found[k].folder);
@@ -108,12 +114,14 @@ std::map<std::string, std::string> sequencePages(const fs::path& out, const Swee
 void writeBenchPages(const fs::path& out, const Sweep& sweep, const std::vector<JobResult>& found,
                      const std::vector<std::string>& tables) {
   std::ostringstream html;
-  html << "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>idyvins bench: " << escapeHtml(sweep.suite)
-       << "</title><style>" << reportStyle() << "</style></head><body><main>\n<h1>idyvins bench: suite "
-       << escapeHtml(sweep.suite) << "</h1>\n<p class=\"note\">modes " << sweep.modes.size() << ", jobs " << sweep.jobs.size()
-       << ", commit " << escapeHtml(sweep.commit) << "; each sequence's page shows its runs side by side.</p>\n";
+  html << "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>idyvins bench: "
+       << escapeHtml(sweep.suite) << "</title><style>" << reportStyle()
+       << "</style></head><body><main>\n<h1>idyvins bench: suite " << escapeHtml(sweep.suite)
+       << "</h1>\n<p class=\"note\">modes " << sweep.modes.size() << ", jobs " << sweep.jobs.size() << ", commit "
+       << escapeHtml(sweep.commit) << "; each sequence's page shows its runs side by side.</p>\n";
   static const char* const titles[] = {"Table I: accuracy", "Table II: time per stage", "Dynamic features"};
-  for (std::size_t i = 0; i < tables.size() && i < 3; ++i) html << "<h2>" << titles[i] << "</h2>\n" << markdownHtml(tables[i]);
+  for (std::size_t i = 0; i < tables.size() && i < 3; ++i)
+    html << "<h2>" << titles[i] << "</h2>\n" << markdownHtml(tables[i]);
   html << "<h2>Sequences</h2>\n<ul>\n";
   for (const auto& [sequence, link] : sequencePages(out, sweep, found)) html << "<li>" << link << "</li>\n";
   html << "</ul>\n";
@@ -127,7 +135,8 @@ void writeBenchPages(const fs::path& out, const Sweep& sweep, const std::vector<
       std::ifstream in(p, std::ios::binary);
       const std::string bytes((std::istreambuf_iterator<char>(in)), {});
       html << "<figure class=\"chart\"><figcaption>" << escapeHtml(p.filename().string())
-           << "</figcaption><img style=\"max-width:100%\" src=\"data:image/png;base64," << base64(bytes) << "\"></figure>\n";
+           << "</figcaption><img style=\"max-width:100%\" src=\"data:image/png;base64," << base64(bytes)
+           << "\"></figure>\n";
     }
   }
   html << "</main></body></html>\n";

@@ -4,11 +4,11 @@
 #include <map>
 
 #include "commands.h"
-#include "pipeline/run.h"
+#include "config/config.h"
 #include "core/build_info.h"
 #include "core/checksum.h"
 #include "core/error.h"
-#include "io/config.h"
+#include "pipeline/run.h"
 
 namespace fs = std::filesystem;
 
@@ -19,14 +19,21 @@ constexpr const char* kFormat = "idyvins-bench";
 constexpr int kVersion = 1;
 
 bool isTiming(const std::string& key) {
-  const bool ms = (key.size() > 3 && key.compare(key.size() - 3, 3, "_ms") == 0) || key.find("_ms_") != std::string::npos;
+  const bool ms =
+      (key.size() > 3 && key.compare(key.size() - 3, 3, "_ms") == 0) || key.find("_ms_") != std::string::npos;
   return ms || key == "wall_s" || key == "realtime_factor";
 }
 
 nlohmann::json jobJson(const Job& j) {
-  return {{"sequence", j.sequence}, {"group", j.group},   {"level", j.level},
-          {"mode", j.mode},         {"dataset", j.dataset}, {"config", j.config},
-          {"name", j.name},         {"config_fnv1a64", j.config_fnv1a64}, {"dataset_fnv1a64", j.dataset_fnv1a64}};
+  return {{"sequence", j.sequence},
+          {"group", j.group},
+          {"level", j.level},
+          {"mode", j.mode},
+          {"dataset", j.dataset},
+          {"config", j.config},
+          {"name", j.name},
+          {"config_fnv1a64", j.config_fnv1a64},
+          {"dataset_fnv1a64", j.dataset_fnv1a64}};
 }
 
 Job jobFromJson(const nlohmann::json& v) {
@@ -59,8 +66,9 @@ std::string quote(const std::string& s) {
 }
 
 std::string shellQuote(const std::string& word) {
-  const bool plain = !word.empty() && word.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
-                                                              "0123456789_-./=:,+@%") == std::string::npos;
+  const bool plain = !word.empty() && word.find_first_not_of(
+                                          "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                          "0123456789_-./=:,+@%") == std::string::npos;
   return plain ? word : quote(word);
 }
 
@@ -96,9 +104,9 @@ std::string jobCommand(const Job& j, const fs::path& out, const std::string& exe
 void writeSweep(const fs::path& out, const Sweep& s) {
   nlohmann::json jobs = nlohmann::json::array();
   for (const Job& j : s.jobs) jobs.push_back(jobJson(j));
-  const nlohmann::json v = {{"format", kFormat}, {"version", kVersion}, {"suite", s.suite},   {"seeds", s.seeds},
-                            {"commit", s.commit}, {"threads", s.threads}, {"modes", s.modes}, {"columns", s.columns},
-                            {"jobs", jobs}};
+  const nlohmann::json v = {{"format", kFormat}, {"version", kVersion},  {"suite", s.suite},
+                            {"seeds", s.seeds},  {"commit", s.commit},   {"threads", s.threads},
+                            {"modes", s.modes},  {"columns", s.columns}, {"jobs", jobs}};
   std::ofstream f(out / "bench.json");
   f << v.dump(1) << "\n";
   if (!f) throw InputError((out / "bench.json").string(), "cannot be written");

@@ -19,10 +19,10 @@
 #include "bench_page.h"
 #include "bench_sweep.h"
 #include "commands.h"
-#include "io/output_folder.h"
+#include "config/config.h"
 #include "core/build_info.h"
 #include "core/error.h"
-#include "io/config.h"
+#include "io/output_folder.h"
 #include "progress.h"
 
 namespace fs = std::filesystem;
@@ -36,7 +36,7 @@ struct BenchArgs {
   double duration = 60.0;
   bool ablations = false;
   bool reuse_runs = false;
-  bool force = false;  ///< --force: an --out holding other files (none is removed)
+  bool force = false;                ///< --force: an --out holding other files (none is removed)
   std::string plan;                  ///< --plan FILE: write the jobs, run none
   std::vector<std::string> collect;  ///< --collect DIR...: tables from finished job folders
   int jobs = 2;
@@ -50,7 +50,6 @@ std::string self() {
   buf[n] = 0;
   return buf;
 }
-
 
 /// ATE, or NaN for a failure (no output, not initialized, or ATE > 10 % of the path: diverged).
 double ateOf(const nlohmann::json& s) {
@@ -106,8 +105,9 @@ const std::vector<std::string> kScenes = {"city", "parking_lot"}, kLevels = {"no
 /// defaults of its day: said once per sequence, on stderr (the run uses it as it is).
 void warnIfConfigPinsEveryKey(const fs::path& config) {
   if (!fs::exists(config) || savedWithChangedKeysOnly(config.string())) return;
-  std::fprintf(stderr, "warning: %s sets every key (rendered before 2026-11-28): it keeps that day's defaults; "
-                       "render it again, or delete the lines of the keys whose default should apply\n",
+  std::fprintf(stderr,
+               "warning: %s sets every key (rendered by an earlier version): it keeps that day's defaults; "
+               "render it again, or delete the lines of the keys whose default should apply\n",
                config.string().c_str());
 }
 
@@ -145,8 +145,8 @@ std::vector<std::pair<std::string, std::string>> simulateMissing(const BenchArgs
         std::fflush(stdout);
         const std::string cmd = quote(exe) + " simulate --scene " + scene + " --level " + level + " --seed " +
                                 std::to_string(seed) + " --duration " + std::to_string(a.duration) + " --realism " +
-                                a.realism + " --family " + family + " --out " +
-                                quote(ds.string()) + " > " + quote((runs / (name + "_simulate.log")).string()) + " 2>&1";
+                                a.realism + " --family " + family + " --out " + quote(ds.string()) + " > " +
+                                quote((runs / (name + "_simulate.log")).string()) + " 2>&1";
         if (std::system(cmd.c_str()) != 0) throw InputError(ds.string(), "simulation failed (see its log in runs/)");
       }
   return sequences;
@@ -191,7 +191,10 @@ Collected collect(const Sweep& sweep, const std::vector<JobResult>& found) {
     const nlohmann::json& s = found[k].problem.empty() ? found[k].summary : nlohmann::json();
     nlohmann::json timing = nlohmann::json::object();
     const std::string run = "runs/" + j.name;
-    c.results.push_back({{"sequence", j.sequence}, {"mode", j.mode}, {"dataset", j.dataset}, {"run", run},
+    c.results.push_back({{"sequence", j.sequence},
+                         {"mode", j.mode},
+                         {"dataset", j.dataset},
+                         {"run", run},
                          {"summary", withoutTiming(s, timing)}});
     c.timing.push_back({{"sequence", j.sequence}, {"mode", j.mode}, {"run", run}, {"timing", timing}});
     c.ate[j.group][j.mode].push_back(ateOf(s));
@@ -279,7 +282,8 @@ std::string table1(const Collected& c, const std::vector<std::string>& modes, co
 std::string table2(const Collected& c, const std::vector<std::string>& modes) {
   std::ostringstream t2;
   t2 << "Mean per frame over both scenes and all seeds: tracking ms + dynamic preprocessing ms (the mode's filter), "
-        "and optimization ms.\n\n| mode | tracking+filter none | low | mid | high | optimization none | low | mid | high |\n"
+        "and optimization ms.\n\n| mode | tracking+filter none | low | mid | high | optimization none | low | mid | "
+        "high |\n"
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
   static const std::vector<nlohmann::json> kNone;
   for (const auto& mode : modes) {
@@ -307,7 +311,8 @@ std::string dynamicTable(const nlohmann::json& results) {
   std::ostringstream td;
   td << "Against the simulator's masks, per tracked observation; an observation counts as flagged when its track "
         "was eliminated or confirmed dynamic. Moving flagged: share of observations on moving objects flagged (all; in "
-        "brackets: of tracks seen in at least two frames). Static flagged: share of static observations flagged. Static "
+        "brackets: of tracks seen in at least two frames). Static flagged: share of static observations flagged. "
+        "Static "
         "map on moving: share of static-map points whose track was mostly on moving objects (in brackets: ever on "
         "one).\n\n| sequence | mode | moving flagged | static flagged | F1 | static map on moving | static map "
         "points |\n| --- | --- | --- | --- | --- | --- | --- |\n";
@@ -354,13 +359,15 @@ std::vector<Job> viodeJobs(const BenchArgs& a, const fs::path& dir, const fs::pa
         const fs::path cfg_dir = out / "configs" / env;
         fs::create_directories(cfg_dir);
         for (const auto& f : fs::directory_iterator(base.parent_path()))
-          if (f.is_regular_file()) fs::copy_file(f.path(), cfg_dir / f.path().filename(), fs::copy_options::overwrite_existing);
+          if (f.is_regular_file())
+            fs::copy_file(f.path(), cfg_dir / f.path().filename(), fs::copy_options::overwrite_existing);
         // The environment's vehicle table replaces the base config's.
         std::ifstream in(base);
         std::string text, line;
         while (std::getline(in, line))
           if (line.rfind("segmentation_vehicle_ids:", 0) != 0) text += line + "\n";
-        std::ofstream(cfg_dir / base.filename()) << text << "segmentation_vehicle_ids: \"vehicle_ids_" << env << ".txt\"\n";
+        std::ofstream(cfg_dir / base.filename())
+            << text << "segmentation_vehicle_ids: \"vehicle_ids_" << env << ".txt\"\n";
         any = true;
       }
       const std::string level = name.substr(2), group = env + "_" + level;
@@ -371,8 +378,9 @@ std::vector<Job> viodeJobs(const BenchArgs& a, const fs::path& dir, const fs::pa
     }
   }
   if (jobs.empty())
-    throw InputError(dir.string(), "holds no VIODE bag (expected <environment>/<k>_<level>.bag with environment "
-                                   "city_day, city_night or parking_lot and k_level 0_none, 1_low, 2_mid or 3_high)");
+    throw InputError(dir.string(),
+                     "holds no VIODE bag (expected <environment>/<k>_<level>.bag with environment "
+                     "city_day, city_night or parking_lot and k_level 0_none, 1_low, 2_mid or 3_high)");
   return jobs;
 }
 
@@ -424,8 +432,8 @@ Sweep planSweep(const BenchArgs& a, const std::string& exe, const fs::path& out)
     for (const auto& [name, ds] : simulateMissing(a, exe, data, runs)) {
       const std::string group = name.substr(0, name.rfind("_s")), level = group.substr(group.rfind('_') + 1);
       for (const auto& mode : sw.modes)
-        sw.jobs.push_back({name, group, level, mode, ds, ds + "/config/sim_stereo_imu_config.yaml", name + "_" + mode,
-                           "", ""});
+        sw.jobs.push_back(
+            {name, group, level, mode, ds, ds + "/config/sim_stereo_imu_config.yaml", name + "_" + mode, "", ""});
     }
   }
   checksumInputs(sw.jobs);
@@ -447,8 +455,9 @@ void checkBenchFolder(const BenchArgs& a) {
   for (fs::recursive_directory_iterator it(a.out, ec), end; !ec && it != end && !has_files; it.increment(ec))
     has_files = !it->is_directory(ec);
   if (has_files)
-    throw InputError(a.out, "holds files of no earlier idyvins bench (no bench.json): name a new or empty folder, or "
-                            "pass --force to write beside them (none is removed)");
+    throw InputError(a.out,
+                     "holds files of no earlier idyvins bench (no bench.json): name a new or empty folder, or "
+                     "pass --force to write beside them (none is removed)");
 }
 
 int runBench(const BenchArgs& a) {
@@ -465,9 +474,10 @@ int runBench(const BenchArgs& a) {
   writeSweep(out, sweep);
   if (!a.plan.empty()) {
     writePlan(a.plan, sweep, out, exe);
-    std::printf("wrote %s: %zu jobs, one shell command per line (run them with e.g. `parallel -j2 < %s`, or a Slurm "
-                "array: docs/cli.md#bench-as-independent-jobs), then: idyvins bench --collect %s\n",
-                a.plan.c_str(), sweep.jobs.size(), a.plan.c_str(), out.c_str());
+    std::printf(
+        "wrote %s: %zu jobs, one shell command per line (run them with e.g. `parallel -j2 < %s`, or a Slurm "
+        "array: docs/cli.md#bench-as-independent-jobs), then: idyvins bench --collect %s\n",
+        a.plan.c_str(), sweep.jobs.size(), a.plan.c_str(), out.c_str());
     return kOk;
   }
   runJobs(sweep.jobs, a, exe, out);
@@ -486,8 +496,8 @@ int collectBench(const BenchArgs& a) {
   const Sweep sweep = readSweep(dirs.front());
   for (std::size_t k = 1; k < dirs.size(); ++k)
     if (fs::exists(dirs[k] / "bench.json") && readSweep(dirs[k]).commit != sweep.commit)
-      throw InputError((dirs[k] / "bench.json").string(), "planned by another commit than " +
-                                                              (dirs.front() / "bench.json").string());
+      throw InputError((dirs[k] / "bench.json").string(),
+                       "planned by another commit than " + (dirs.front() / "bench.json").string());
   const fs::path out = a.out.empty() ? dirs.front() : fs::path(a.out);
   std::error_code ec;
   fs::create_directories(out, ec);
@@ -527,14 +537,16 @@ void registerBench(CLI::App& app, int& exit_code) {
                   "standard, validation: camera realism of the simulated sequences, none (default) or euroc (see\n"
                   "simulate --help); keep each realism in its own --data folder")
       ->check(CLI::IsMember({"none", "euroc"}));
-  cmd->add_option("--data", a->data, "standard, validation: where the simulated datasets live (default OUT/data); viode: VIODE's folder");
+  cmd->add_option("--data", a->data,
+                  "standard, validation: where the simulated datasets live (default OUT/data); viode: VIODE's folder");
   cmd->add_option("-j,--jobs", a->jobs, "runs in parallel (default 2)")->check(CLI::Range(1, 64));
   cmd->add_flag("--ablations", a->ablations, "also run idy-pre and idy-ba");
   cmd->add_option("--threads", a->run_threads,
                   "threads of each run: 1 (default) or 2 (pipelined runs, `run --threads 2`; use --jobs 1\n"
                   "so that runs do not share the cores)")
       ->check(CLI::Range(1, 2));
-  cmd->add_option("--modes", a->modes, "comma-separated modes to run instead (must include baseline), e.g. baseline,ransac,idy");
+  cmd->add_option("--modes", a->modes,
+                  "comma-separated modes to run instead (must include baseline), e.g. baseline,ransac,idy");
   cmd->add_flag("--reuse-runs", a->reuse_runs,
                 "keep runs that already have OUT/runs/<sequence>_<mode>/stats.json (resume an interrupted\n"
                 "benchmark, or re-run only the modes whose run folders were deleted)");
@@ -543,10 +555,11 @@ void registerBench(CLI::App& app, int& exit_code) {
                   "line (each skips itself when its run folder is finished), the job's name and its inputs' checksums\n"
                   "in a trailing comment; OUT/bench.json describes the sweep. Missing datasets are simulated first.\n"
                   "Run the lines anywhere (GNU parallel, a Slurm array, a Kubernetes Indexed Job), then --collect");
-  cmd->add_option("--collect", a->collect,
-                  "DIR...: write the tables, results.json and plots of a planned sweep from the finished job folders\n"
-                  "under each DIR/runs (the first DIR holds bench.json; --out defaults to it). Refuses runs of another\n"
-                  "commit or config; names jobs without a result and exits 1")
+  cmd->add_option(
+         "--collect", a->collect,
+         "DIR...: write the tables, results.json and plots of a planned sweep from the finished job folders\n"
+         "under each DIR/runs (the first DIR holds bench.json; --out defaults to it). Refuses runs of another\n"
+         "commit or config; names jobs without a result and exits 1")
       ->expected(1, -1);
   cmd->callback([a, &exit_code] { exit_code = a->collect.empty() ? runBench(*a) : collectBench(*a); });
 }

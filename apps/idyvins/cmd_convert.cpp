@@ -8,9 +8,9 @@
 #include <optional>
 
 #include "commands.h"
+#include "config/config.h"
 #include "core/error.h"
 #include "io/bag_dataset.h"
-#include "io/config.h"
 #include "io/trajectory_io.h"
 #include "pipeline/run.h"
 #include "progress.h"
@@ -38,8 +38,9 @@ void writeImage(const fs::path& path, const cv::Mat& image) {
 
 /// EuRoC's imu0/data.csv, every digit kept.
 void writeImuCsv(const fs::path& path, const std::vector<ImuSample>& imu) {
-  std::ofstream csv = openCsv(path, "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
-                                    "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]");
+  std::ofstream csv = openCsv(path,
+                              "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+                              "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]");
   char buf[512];
   for (const auto& m : imu) {
     std::snprintf(buf, sizeof(buf), "%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", static_cast<long long>(m.t_ns),
@@ -53,8 +54,10 @@ int runConvert(const ConvertArgs& a) {
   std::optional<Config> config;
   if (!a.config.empty()) config = loadConfig(a.config);
   io::BagTopics topics;
-  if (config) topics = pipeline::datasetRequest(*config, a.groundtruth_topic).topics;
-  else topics.groundtruth = a.groundtruth_topic;
+  if (config)
+    topics = pipeline::datasetRequest(*config, a.groundtruth_topic).topics;
+  else
+    topics.groundtruth = a.groundtruth_topic;
   const int w = config ? config->image_width : 0, h = config ? config->image_height : 0;
   io::BagIndex index = io::indexBag(a.bag, topics, w, h);
   const fs::path mav0 = fs::path(a.out) / "mav0";
@@ -97,9 +100,10 @@ int runConvert(const ConvertArgs& a) {
     bar.update(++k);
   }
   bar.finish();
-  std::printf("wrote %s: %zu %s frames%s, %zu IMU samples, %s\n", mav0.string().c_str(), k, stereo ? "stereo" : "mono",
-              colors ? " with masks (cam0/mask)" : "", imu.size(),
-              groundtruth.empty() ? "no ground truth" : (std::to_string(groundtruth.size()) + " ground-truth states").c_str());
+  std::printf(
+      "wrote %s: %zu %s frames%s, %zu IMU samples, %s\n", mav0.string().c_str(), k, stereo ? "stereo" : "mono",
+      colors ? " with masks (cam0/mask)" : "", imu.size(),
+      groundtruth.empty() ? "no ground truth" : (std::to_string(groundtruth.size()) + " ground-truth states").c_str());
   return kOk;
 }
 

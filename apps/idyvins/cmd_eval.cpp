@@ -7,9 +7,9 @@
 #include <sstream>
 
 #include "commands.h"
-#include "io/open_dataset.h"
 #include "core/error.h"
 #include "eval/trajectory_metrics.h"
+#include "io/open_dataset.h"
 #include "io/trajectory_io.h"
 
 namespace idyvins::app {
@@ -22,8 +22,8 @@ struct EvalArgs {
 };
 
 nlohmann::json statsJson(const eval::ErrorStats& s) {
-  return {{"n", s.n},       {"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median},
-          {"std", s.std},   {"min", s.min},   {"max", s.max},   {"sse", s.sse}};
+  return {{"n", s.n},     {"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median},
+          {"std", s.std}, {"min", s.min},   {"max", s.max},   {"sse", s.sse}};
 }
 
 std::vector<double> parseDeltas(const std::string& text) {
@@ -127,13 +127,13 @@ int runEval(const EvalArgs& a) {
 
 void registerEval(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<EvalArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "eval",
-      "Absolute (ATE) and relative (RPE) trajectory error of an estimate against a reference,\n"
-      "with evo's conventions: association by nearest time stamp within --max-dt from the\n"
-      "shorter trajectory, Umeyama alignment of the estimate onto the reference, RPE over\n"
-      "path-length deltas with consecutive pairs. Files: TUM (t x y z qx qy qz qw) or EuRoC CSV\n"
-      "(also the 17-column ground truth); --gt may be a EuRoC dataset folder.");
+  CLI::App* cmd =
+      app.add_subcommand("eval",
+                         "Absolute (ATE) and relative (RPE) trajectory error of an estimate against a reference,\n"
+                         "with evo's conventions: association by nearest time stamp within --max-dt from the\n"
+                         "shorter trajectory, Umeyama alignment of the estimate onto the reference, RPE over\n"
+                         "path-length deltas with consecutive pairs. Files: TUM (t x y z qx qy qz qw) or EuRoC CSV\n"
+                         "(also the 17-column ground truth); --gt may be a EuRoC dataset folder.");
   cmd->add_option("--gt", a->gt, "reference trajectory (TUM, EuRoC CSV) or EuRoC folder")->required();
   cmd->add_option("--est", a->est, "estimated trajectory (TUM or EuRoC CSV)")->required();
   cmd->add_option("--align", a->align, "se3 (default) | sim3 | posyaw (4-DoF) | none");

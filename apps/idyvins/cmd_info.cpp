@@ -7,14 +7,14 @@
 #include <optional>
 
 #include "commands.h"
+#include "config/config.h"
 #include "core/error.h"
+#include "imu/spike_gate.h"
 #include "io/bag_dataset.h"
-#include "io/config.h"
 #include "io/dataset_summary.h"
+#include "io/euroc_dataset.h"
 #include "pipeline/run.h"
 #include "pipeline/system.h"
-#include "io/euroc_dataset.h"
-#include "imu/spike_gate.h"
 #include "progress.h"
 
 namespace idyvins::app {
@@ -29,15 +29,13 @@ struct InfoArgs {
 };
 
 nlohmann::json toJson(const io::StreamStats& s) {
-  return {{"count", s.count},       {"first_ns", s.first_ns}, {"last_ns", s.last_ns},
-          {"span_s", s.span_s},     {"rate_hz", s.rate_hz},   {"max_gap_s", s.max_gap_s},
-          {"gaps", s.gaps}};
+  return {{"count", s.count},     {"first_ns", s.first_ns},   {"last_ns", s.last_ns}, {"span_s", s.span_s},
+          {"rate_hz", s.rate_hz}, {"max_gap_s", s.max_gap_s}, {"gaps", s.gaps}};
 }
 
 void printStream(const char* name, const io::StreamStats& s, const char* unit) {
-  std::printf("  %-12s %6zu %-8s %7.2f Hz  span %8.3f s  [%s .. %s]  max gap %.3f s", name,
-              s.count, unit, s.rate_hz, s.span_s, formatSeconds(s.first_ns).c_str(),
-              formatSeconds(s.last_ns).c_str(), s.max_gap_s);
+  std::printf("  %-12s %6zu %-8s %7.2f Hz  span %8.3f s  [%s .. %s]  max gap %.3f s", name, s.count, unit, s.rate_hz,
+              s.span_s, formatSeconds(s.first_ns).c_str(), formatSeconds(s.last_ns).c_str(), s.max_gap_s);
   if (s.gaps) std::printf("  (%zu gaps > 1.5x nominal)", s.gaps);
   std::printf("\n");
 }
@@ -112,10 +110,10 @@ SpikeCount imuSpikes(const std::vector<ImuSample>& imu, const imu::SpikeGateOpti
 struct InfoOutcome {
   const io::EurocDataset& ds;
   const io::DatasetSummary& s;
-  const io::BagIndex* bag;  ///< null for a EuRoC folder
-  const Config* config;     ///< null without --config
-  std::pair<int, int> size;  ///< image size (0 x 0 with --skip-images)
-  SpikeCount spikes;         ///< IMU spikes the spike gate would drop
+  const io::BagIndex* bag;            ///< null for a EuRoC folder
+  const Config* config;               ///< null without --config
+  std::pair<int, int> size;           ///< image size (0 x 0 with --skip-images)
+  SpikeCount spikes;                  ///< IMU spikes the spike gate would drop
   std::vector<std::string> warnings;  ///< what run would warn about (config keys, plausibility)
 };
 
@@ -139,7 +137,8 @@ void printJson(const InfoArgs& args, const InfoOutcome& o) {
   if (o.bag) {
     j["format"] = "rosbag";
     j["topics"] = nlohmann::json::array();
-    for (const auto& t : o.bag->all_topics) j["topics"].push_back({{"topic", t.topic}, {"type", t.type}, {"count", t.count}});
+    for (const auto& t : o.bag->all_topics)
+      j["topics"].push_back({{"topic", t.topic}, {"type", t.type}, {"count", t.count}});
   }
   j["warnings"] = o.warnings;
   std::cout << j.dump(2) << "\n";
@@ -148,7 +147,8 @@ void printJson(const InfoArgs& args, const InfoOutcome& o) {
 void printText(const InfoArgs& args, const InfoOutcome& o) {
   const io::DatasetSummary& s = o.s;
   const io::BagIndex* bag = o.bag;
-  std::printf("dataset: %s (%s, %s)\n", o.ds.root.c_str(), bag ? "ROS1 bag" : "EuRoC ASL", s.stereo ? "stereo" : "mono");
+  std::printf("dataset: %s (%s, %s)\n", o.ds.root.c_str(), bag ? "ROS1 bag" : "EuRoC ASL",
+              s.stereo ? "stereo" : "mono");
   if (bag) {
     for (const auto& t : bag->all_topics)
       std::printf("  topic        %-40s %-32s %7zu messages\n", t.topic.c_str(), t.type.c_str(), t.count);
@@ -161,17 +161,18 @@ void printText(const InfoArgs& args, const InfoOutcome& o) {
   if (s.stereo) printStream("cam1", s.cam1, "images");
   printStream(s.stereo ? "stereo pairs" : "frames", s.pairs, "frames");
   if (s.stereo) {
-    std::printf("  unmatched    cam0 %zu, cam1 %zu rows without a partner within 1 ms", s.unmatched0,
-                s.unmatched1);
-    if (s.unmatched_missing_image)
-      std::printf(" (%zu of them have no image file)", s.unmatched_missing_image);
+    std::printf("  unmatched    cam0 %zu, cam1 %zu rows without a partner within 1 ms", s.unmatched0, s.unmatched1);
+    if (s.unmatched_missing_image) std::printf(" (%zu of them have no image file)", s.unmatched_missing_image);
     std::printf("; not used\n");
   }
-  if (s.has_groundtruth) printStream("groundtruth", s.groundtruth, "states");
-  else if (bag) std::printf("  groundtruth  none (no --groundtruth-topic, no groundtruth_topic in the config)\n");
-  else std::printf("  groundtruth  none (no state_groundtruth_estimate0/data.csv)\n");
-  std::printf("  imu coverage %.3f s before the first frame, %.3f s after the last\n",
-              s.imu_before_first_frame_s, s.imu_after_last_frame_s);
+  if (s.has_groundtruth)
+    printStream("groundtruth", s.groundtruth, "states");
+  else if (bag)
+    std::printf("  groundtruth  none (no --groundtruth-topic, no groundtruth_topic in the config)\n");
+  else
+    std::printf("  groundtruth  none (no state_groundtruth_estimate0/data.csv)\n");
+  std::printf("  imu coverage %.3f s before the first frame, %.3f s after the last\n", s.imu_before_first_frame_s,
+              s.imu_after_last_frame_s);
   if (s.imu_before_first_frame_s < 0 || s.imu_after_last_frame_s < 0)
     std::printf("  warning: IMU does not cover every frame\n");
   if (o.spikes.runs > 0)
@@ -180,11 +181,13 @@ void printText(const InfoArgs& args, const InfoOutcome& o) {
   else
     std::printf("  imu spikes   none that run would drop\n");
   if (!args.skip_images)
-    std::printf("  images       %zu pairs read, all %dx%d 8-bit gray\n", o.ds.pairs.size(),
-                o.size.first, o.size.second);
+    std::printf("  images       %zu pairs read, all %dx%d 8-bit gray\n", o.ds.pairs.size(), o.size.first,
+                o.size.second);
   if (o.config) std::printf("%s", describe(*o.config).c_str());
-  if (o.warnings.empty()) std::printf("valid: yes\n");
-  else std::printf("valid: yes, with %zu warning(s) (on stderr; run prints them too)\n", o.warnings.size());
+  if (o.warnings.empty())
+    std::printf("valid: yes\n");
+  else
+    std::printf("valid: yes, with %zu warning(s) (on stderr; run prints them too)\n", o.warnings.size());
 }
 
 int runInfo(const InfoArgs& args) {
@@ -192,8 +195,8 @@ int runInfo(const InfoArgs& args) {
   if (!args.config.empty()) config = loadConfig(args.config);
   std::optional<io::BagIndex> bag;
   if (io::isBagFile(args.dataset))
-    bag = io::indexBag(args.dataset, defaultBagTopics(config, args.groundtruth_topic),
-                       config ? config->image_width : 0, config ? config->image_height : 0);
+    bag = io::indexBag(args.dataset, defaultBagTopics(config, args.groundtruth_topic), config ? config->image_width : 0,
+                       config ? config->image_height : 0);
   io::EurocDataset folder;
   if (!bag) folder = io::readEurocDataset(args.dataset);
   const io::EurocDataset& ds = bag ? bag->dataset : folder;  // no copy of a long bag's index
@@ -211,7 +214,7 @@ int runInfo(const InfoArgs& args) {
     warnings.insert(warnings.end(), more.begin(), more.end());
   }
   for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
-  const SpikeCount spikes = imuSpikes(ds.imu, config ? config->imu_spike : imu::SpikeGateOptions{});
+  const SpikeCount spikes = imuSpikes(ds.imu, config ? config->imu.spike : imu::SpikeGateOptions{});
   const InfoOutcome outcome{ds, s, bag ? &*bag : nullptr, config ? &*config : nullptr, size, spikes, warnings};
   if (args.json)
     printJson(args, outcome);
@@ -224,18 +227,16 @@ int runInfo(const InfoArgs& args) {
 
 void registerInfo(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<InfoArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "info",
-      "Print what a EuRoC ASL dataset or a ROS1 bag holds (counts, rates, time span, gaps,\n"
-      "unmatched stereo rows, calibration; for a bag also every topic with its type and count)\n"
-      "and validate it: syntax, time order, every image readable and of the config's size.\n"
-      "Exits 1 with file:line: reason on bad input.");
-  cmd->add_option("dataset", args->dataset, "EuRoC folder (holding mav0/), the mav0 folder, or a ROS1 bag")
-      ->required();
+  CLI::App* cmd =
+      app.add_subcommand("info",
+                         "Print what a EuRoC ASL dataset or a ROS1 bag holds (counts, rates, time span, gaps,\n"
+                         "unmatched stereo rows, calibration; for a bag also every topic with its type and count)\n"
+                         "and validate it: syntax, time order, every image readable and of the config's size.\n"
+                         "Exits 1 with file:line: reason on bad input.");
+  cmd->add_option("dataset", args->dataset, "EuRoC folder (holding mav0/), the mav0 folder, or a ROS1 bag")->required();
   cmd->add_option("--groundtruth-topic", args->groundtruth_topic,
                   "bag only: ground-truth topic, e.g. /odometry (VIODE) or /vicon/firefly_sbx/firefly_sbx (EuRoC)");
-  cmd->add_option("-c,--config", args->config,
-                  "VINS-Fusion config to validate against (image size, camera count)");
+  cmd->add_option("-c,--config", args->config, "VINS-Fusion config to validate against (image size, camera count)");
   cmd->add_flag("--json", args->json, "print the summary as JSON");
   cmd->add_flag("--skip-images", args->skip_images, "do not read the images (faster)");
   cmd->callback([args, &exit_code] { exit_code = runInfo(*args); });

@@ -23,9 +23,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::vector<std::string> kFaults = {"imu-gap", "silence",   "frame-drop", "time-jump", "desync",
-                                          "duplicate-stamps", "black", "saturated", "frozen",  "corrupt",
-                                          "salt",      "imu-spike"};
+const std::vector<std::string> kFaults = {"imu-gap", "silence",          "frame-drop", "time-jump",
+                                          "desync",  "duplicate-stamps", "black",      "saturated",
+                                          "frozen",  "corrupt",          "salt",       "imu-spike"};
 
 struct PerturbArgs {
   std::string dataset, out, fault;
@@ -124,8 +124,10 @@ void applyImageFault(const PerturbArgs& a, const fs::path& mav0, const std::func
     }
     const cv::Mat img = cv::imread(p.string(), cv::IMREAD_UNCHANGED);
     if (img.empty()) throw InputError(p.string(), "cannot read image");
-    if (a.fault == "black") replaceImage(p, cv::Mat::zeros(img.size(), img.type()));
-    else if (a.fault == "saturated") replaceImage(p, cv::Mat(img.size(), img.type(), cv::Scalar::all(255)));
+    if (a.fault == "black")
+      replaceImage(p, cv::Mat::zeros(img.size(), img.type()));
+    else if (a.fault == "saturated")
+      replaceImage(p, cv::Mat(img.size(), img.type(), cv::Scalar::all(255)));
     else if (a.fault == "salt") {  // MAGNITUDE (default 10) % of the pixels black or white
       cv::Mat noisy = img.clone(), u(img.size(), CV_32F);
       std::uint64_t seed = 1469598103934665603ull + static_cast<std::uint64_t>(cam);  // FNV-1a of the name
@@ -137,8 +139,10 @@ void applyImageFault(const PerturbArgs& a, const fs::path& mav0, const std::func
       noisy.setTo(cv::Scalar::all(255), (u >= share / 2) & (u < share));
       replaceImage(p, noisy);
     } else if (a.fault == "frozen") {  // the first image of the window, again and again
-      if (!frozen[cam]) frozen[cam] = img;
-      else replaceImage(p, *frozen[cam]);
+      if (!frozen[cam])
+        frozen[cam] = img;
+      else
+        replaceImage(p, *frozen[cam]);
     }
   });
 }
@@ -187,8 +191,8 @@ struct Magnitude {
   double fallback;
   const char* unit;
 };
-constexpr Magnitude kMagnitudes[] = {{"time-jump", 0.5, "s"}, {"desync", 5.0, "ms"}, {"imu-spike", 98.0, "m/s^2"},
-                                     {"salt", 10.0, "%"}};
+constexpr Magnitude kMagnitudes[] = {
+    {"time-jump", 0.5, "s"}, {"desync", 5.0, "ms"}, {"imu-spike", 98.0, "m/s^2"}, {"salt", 10.0, "%"}};
 
 /// The arguments with the fault's magnitude filled in, checked against the dataset. Throws.
 PerturbArgs checkedArgs(PerturbArgs a, const io::EurocDataset& ds) {
@@ -221,7 +225,7 @@ int runPerturb(const PerturbArgs& args) {
   fs::copy(a.dataset, a.out, fs::copy_options::recursive | fs::copy_options::create_hard_links);
   const fs::path mav0 = fs::path(ds.root).filename() == "mav0" ? fs::path(a.out) / "mav0" : fs::path(a.out);
   applyFault(a, mav0, ds.cam0.front().t_ns);
-  const nlohmann::json what = {{"source", a.dataset},  {"fault", a.fault},       {"at_s", a.at_s},
+  const nlohmann::json what = {{"source", a.dataset},        {"fault", a.fault}, {"at_s", a.at_s},
                                {"duration_s", a.duration_s}, {"count", a.count}, {"magnitude", a.magnitude}};
   std::ofstream(fs::path(a.out) / "perturb.json") << what.dump(1) << '\n';
   std::printf("wrote %s: %s at %.3f s into the sequence\n", a.out.c_str(), a.fault.c_str(), a.at_s);
@@ -241,7 +245,8 @@ void registerPerturb(CLI::App& app, int& exit_code) {
       "negative: backwards); desync (cam1 stamps of the window moved by MAGNITUDE ms; beyond 1 ms the\n"
       "frames lose their partner); duplicate-stamps (frames of the window stamped like the one before);\n"
       "black, saturated, frozen (images of the window), salt (MAGNITUDE %, default 10, of their pixels\n"
-      "black or white), corrupt (their PNG files cut in half); imu-spike (COUNT samples from at get MAGNITUDE m/s^2 more on x).\n"
+      "black or white), corrupt (their PNG files cut in half); imu-spike (COUNT samples from at get MAGNITUDE m/s^2 "
+      "more on x).\n"
       "Writes OUT/perturb.json with the fault.");
   cmd->add_option("dataset", a->dataset, "EuRoC folder")->required();
   cmd->add_option("out", a->out, "new folder")->required();

@@ -9,8 +9,8 @@
 #include <memory>
 
 #include "commands.h"
+#include "config/config.h"
 #include "core/error.h"
-#include "io/config.h"
 #include "map/map_io.h"
 #include "pipeline/outputs.h"
 #include "pipeline/run.h"
@@ -158,8 +158,7 @@ void registerRun(CLI::App& app, int& exit_code, const std::string& command_line)
                   "relocalized). With --save-map the map is extended by this run; turns loop closure on");
   cmd->add_flag("--localization-only", a->localization_only,
                 "with --load-map: localize in the map without adding this run's keyframes to it");
-  cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)")
-      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--threads", a->threads,
                   "2 (default): pipelined, the front end of frame k+1 runs beside the back end of frame k (its\n"
                   "motion prior comes from the state of frame k-1 propagated with the IMU; deterministic, equal\n"
@@ -170,10 +169,11 @@ void registerRun(CLI::App& app, int& exit_code, const std::string& command_line)
                   "does; with --threads 1 it reproduces a pipelined run) or 0 (the default with --threads 1)")
       ->check(CLI::Range(0, 1));
   cmd->add_flag("--solver-time-limit", a->solver_time_limit,
-               "cap each solve at the config's max_solver_time of wall clock, as VINS-Fusion does (live use;\n"
-               "results then depend on the machine's load). Same as solver_time_limit: 1 in the config");
+                "cap each solve at the config's max_solver_time of wall clock, as VINS-Fusion does (live use;\n"
+                "results then depend on the machine's load). Same as solver_time_limit: 1 in the config");
   cmd->add_option("--dump-observations", a->dump_observations,
-                  "write one CSV row per tracked observation (front-end label, d_s, stereo-test chi2, ground-truth mask, final fate)");
+                  "write one CSV row per tracked observation (front-end label, d_s, stereo-test chi2, ground-truth "
+                  "mask, final fate)");
   cmd->callback([a, &exit_code, &command_line] {
     a->command_line = command_line;
     exit_code = runRun(*a);

@@ -115,12 +115,13 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
     bar.update(done);
   });
   bar.finish();
-  std::printf("%s: %s %s seed %llu, %.1f s, %zu stereo frames, %zu IMU samples, path %.1f m, "
-              "moving objects cover %.1f%% of cam0 on average (max %.1f%%, >=30%% in %.1f%% of frames), "
-              "written in %.1f s\n",
-              dir.c_str(), scene.c_str(), level.c_str(), static_cast<unsigned long long>(a.seed), a.duration,
-              r.frames, r.imu_samples, r.path_length_m, 100 * r.coverage.mean, 100 * r.coverage.max,
-              100 * r.coverage.frames_over_30pct, r.seconds);
+  std::printf(
+      "%s: %s %s seed %llu, %.1f s, %zu stereo frames, %zu IMU samples, path %.1f m, "
+      "moving objects cover %.1f%% of cam0 on average (max %.1f%%, >=30%% in %.1f%% of frames), "
+      "written in %.1f s\n",
+      dir.c_str(), scene.c_str(), level.c_str(), static_cast<unsigned long long>(a.seed), a.duration, r.frames,
+      r.imu_samples, r.path_length_m, 100 * r.coverage.mean, 100 * r.coverage.max, 100 * r.coverage.frames_over_30pct,
+      r.seconds);
   if (a.format != "euroc") writeBag(a, scene, level, out, dir);
   for (const std::string& w : folder.publish()) std::fprintf(stderr, "warning: %s\n", w.c_str());
   return kOk;
@@ -128,14 +129,14 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
 
 int runSimulate(const SimulateArgs& a) {
   if (!(a.duration > 0)) throw CLI::ValidationError("--duration", "must be positive");
-  if (a.depth && a.format == "bag") throw CLI::ValidationError("--depth", "depth images go into the EuRoC folder: --format euroc or both");
+  if (a.depth && a.format == "bag")
+    throw CLI::ValidationError("--depth", "depth images go into the EuRoC folder: --format euroc or both");
   if (a.noise < 0) throw CLI::ValidationError("--noise", "must be >= 0");
   if (!a.standard_set) return simulateOne(a, a.scene, a.level, a.out);
   for (const char* scene : {"city", "parking_lot"})
     for (const char* level : {"none", "low", "mid", "high"}) {
-      const std::string dir = (std::filesystem::path(a.out) / (std::string(scene) + "_" + level + "_s" +
-                                                               std::to_string(a.seed)))
-                                  .string();
+      const std::string dir =
+          (std::filesystem::path(a.out) / (std::string(scene) + "_" + level + "_s" + std::to_string(a.seed))).string();
       if (std::filesystem::exists(std::filesystem::path(dir) / "meta.json")) {
         std::printf("%s: exists, kept\n", dir.c_str());
         continue;
@@ -166,16 +167,17 @@ void addRunThroughPlaceOptions(CLI::App* cmd, SimulateArgs& args) {
 
 void registerSimulate(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<SimulateArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "simulate",
-      "Render a synthetic stereo-inertial dataset of a dynamic scene (VIODE-like) in EuRoC\n"
-      "layout: cam0/cam1 PNGs (752x480, 20 Hz) with per-pixel object-id masks, IMU at 200 Hz\n"
-      "(ADIS16448-like noise and bias random walk), ground truth with velocity and biases,\n"
-      "a VINS-Fusion config under DIR/config/, and DIR/meta.json. Deterministic.");
+  CLI::App* cmd =
+      app.add_subcommand("simulate",
+                         "Render a synthetic stereo-inertial dataset of a dynamic scene (VIODE-like) in EuRoC\n"
+                         "layout: cam0/cam1 PNGs (752x480, 20 Hz) with per-pixel object-id masks, IMU at 200 Hz\n"
+                         "(ADIS16448-like noise and bias random walk), ground truth with velocity and biases,\n"
+                         "a VINS-Fusion config under DIR/config/, and DIR/meta.json. Deterministic.");
   cmd->add_option("--scene", a->scene, "city | parking_lot")->check(CLI::IsMember({"city", "parking_lot"}));
   cmd->add_option("--level", a->level, "moving objects: none | low | mid | high")
       ->check(CLI::IsMember({"none", "low", "mid", "high"}));
-  cmd->add_option("--seed", a->seed, "random seed of the place (layout, textures) and, unless --traffic-seed, of the run");
+  cmd->add_option("--seed", a->seed,
+                  "random seed of the place (layout, textures) and, unless --traffic-seed, of the run");
   addRunThroughPlaceOptions(cmd, *a);
   cmd->add_option("--duration", a->duration, "seconds of data");
   cmd->add_option("-o,--out", a->out,

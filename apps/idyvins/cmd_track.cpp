@@ -7,16 +7,16 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "commands.h"
-#include "pipeline/run.h"
+#include "config/config.h"
+#include "config/modes.h"
 #include "core/error.h"
 #include "eval/image_stats.h"
 #include "frontend/feature_tracker.h"
 #include "frontend/track_quality.h"
-#include "pipeline/front_end.h"
-#include "io/config.h"
 #include "io/data_source.h"
+#include "pipeline/front_end.h"
+#include "pipeline/run.h"
 #include "progress.h"
-#include "pipeline/modes.h"
 
 namespace idyvins::app {
 namespace {
@@ -31,11 +31,11 @@ struct TrackArgs {
 nlohmann::json printTrackSummary(const std::string& mode, std::size_t frames, std::size_t features, std::size_t stereo,
                                  std::size_t removed, double ms, double filter_ms,
                                  const frontend::TrackQualitySummary& q) {
-  std::printf("%zu frames, mode %s: %.1f features/frame (%.0f%% with a stereo match), %.2f removed/frame, "
-              "tracking %.2f ms/frame, filter %.3f ms/frame\n",
-              frames, mode.c_str(), static_cast<double>(features) / frames,
-              100.0 * stereo / std::max<std::size_t>(features, 1), static_cast<double>(removed) / frames, ms / frames,
-              filter_ms / frames);
+  std::printf(
+      "%zu frames, mode %s: %.1f features/frame (%.0f%% with a stereo match), %.2f removed/frame, "
+      "tracking %.2f ms/frame, filter %.3f ms/frame\n",
+      frames, mode.c_str(), static_cast<double>(features) / frames, 100.0 * stereo / std::max<std::size_t>(features, 1),
+      static_cast<double>(removed) / frames, ms / frames, filter_ms / frames);
   if (q.with_right)
     std::printf("right matches: distance to the epipolar line median %.2f px, p99 %.2f px (calibrated extrinsics)\n",
                 q.epipolar_median_px, q.epipolar_p99_px);
@@ -52,11 +52,12 @@ nlohmann::json printTrackSummary(const std::string& mode, std::size_t frames, st
 
 /// Prints the left images' statistics (--image-stats) and returns them as JSON.
 nlohmann::json printImageFigures(const eval::SequenceFigures& s, double min_dist) {
-  std::printf("images (left): brightness mean %.1f, spread (std) %.1f, frame-to-frame variation %.1f %%; "
-              "gradient median %.2f, p90 %.2f gray/px, flat (< 2 gray/px) %.1f %%; %zu Shi-Tomasi corners "
-              "(quality 0.01, %g px apart)\n",
-              s.mean.mean, s.mean.stddev, 100 * s.frame_mean_variation, s.mean.gradient_median, s.mean.gradient_p90,
-              100 * s.mean.flat_fraction, s.mean.corners, min_dist);
+  std::printf(
+      "images (left): brightness mean %.1f, spread (std) %.1f, frame-to-frame variation %.1f %%; "
+      "gradient median %.2f, p90 %.2f gray/px, flat (< 2 gray/px) %.1f %%; %zu Shi-Tomasi corners "
+      "(quality 0.01, %g px apart)\n",
+      s.mean.mean, s.mean.stddev, 100 * s.frame_mean_variation, s.mean.gradient_median, s.mean.gradient_p90,
+      100 * s.mean.flat_fraction, s.mean.corners, min_dist);
   std::printf("vignetting (ring mean / centre, r = 0-0.2 ... 0.8-1 of the half diagonal):");
   for (double v : s.vignetting) std::printf(" %.3f", v);
   std::printf("; right / left brightness %.3f\n", s.right_left_ratio);
@@ -74,10 +75,11 @@ nlohmann::json printImageFigures(const eval::SequenceFigures& s, double min_dist
 int runTrack(const TrackArgs& a) {
   Config config = loadConfig(a.config);
   Mode mode;
-  if (!parseMode(a.mode, mode) || pipeline::traitsOf(mode).filter == pipeline::FilterKind::kIdy)
+  if (!parseMode(a.mode, mode) || traitsOf(mode).filter == FilterKind::kIdy)
     throw CLI::ValidationError("--mode", "expected baseline|ransac|seg for the front end alone, got '" + a.mode + "'");
   config.mode = mode;
-  const io::OpenedDataset in = pipeline::openDataset(a.dataset, config, "", pipeline::traitsOf(mode).needs_masks);  // a folder or a bag
+  const io::OpenedDataset in =
+      pipeline::openDataset(a.dataset, config, "", traitsOf(mode).needs_masks);  // a folder or a bag
   io::DataSource& source = *in.source;
   if (!a.save_tracks.empty()) {
     std::error_code ec;
@@ -137,8 +139,7 @@ void registerTrack(CLI::App& app, int& exit_code) {
   cmd->add_option("-d,--dataset", a->dataset, "EuRoC folder or ROS1 bag (topics from the config)")->required();
   cmd->add_option("--mode", a->mode, "baseline | ransac | seg (seg reads mav0/cam0/mask/)");
   cmd->add_option("--save-tracks", a->save_tracks, "folder for the track images");
-  cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)")
-      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)")->check(CLI::NonNegativeNumber);
   cmd->add_flag("--image-stats", a->image_stats,
                 "also measure the input images: brightness and its spread, exposure variation between\n"
                 "frames, gradient magnitudes, Shi-Tomasi corners, vignetting profile, right/left brightness");

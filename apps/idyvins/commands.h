@@ -5,7 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
-#include "io/config.h"
+#include "config/config.h"
 
 namespace idyvins::app {
 

@@ -25,14 +25,13 @@ void ProgressBar::update(std::size_t done) {
 void ProgressBar::finish() { draw(true); }
 
 void ProgressBar::draw(bool final) {
-  const double elapsed =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   const double rate = elapsed > 0 ? done_ / elapsed : 0.0;
   const double eta = rate > 0 ? (total_ - std::min(done_, total_)) / rate : 0.0;
   if (!enabled_) {
     if (final)
-      std::fprintf(stderr, "%s: %zu/%zu %s in %.1f s (%.1f %s/s)\n", label_.c_str(), done_,
-                   total_, unit_, elapsed, rate, unit_);
+      std::fprintf(stderr, "%s: %zu/%zu %s in %.1f s (%.1f %s/s)\n", label_.c_str(), done_, total_, unit_, elapsed,
+                   rate, unit_);
     return;
   }
   constexpr int kWidth = 30;
@@ -40,8 +39,8 @@ void ProgressBar::draw(bool final) {
   const int filled = static_cast<int>(frac * kWidth);
   std::string bar(filled, '#');
   bar.resize(kWidth, '.');
-  std::fprintf(stderr, "\r%s [%s] %zu/%zu %s  %.1f %s/s  ETA %.0f s   ", label_.c_str(),
-               bar.c_str(), done_, total_, unit_, rate, unit_, final ? 0.0 : eta);
+  std::fprintf(stderr, "\r%s [%s] %zu/%zu %s  %.1f %s/s  ETA %.0f s   ", label_.c_str(), bar.c_str(), done_, total_,
+               unit_, rate, unit_, final ? 0.0 : eta);
   if (final) std::fprintf(stderr, "\n");
   std::fflush(stderr);
 }

@@ -8,9 +8,9 @@
 
 #include "core/error.h"
 #include "eval/trajectory_metrics.h"
+#include "io/open_dataset.h"
 #include "io/ply.h"
 #include "io/trajectory_io.h"
-#include "io/open_dataset.h"
 
 namespace fs = std::filesystem;
 
@@ -23,7 +23,8 @@ double round3(double v) { return std::isfinite(v) ? std::round(v * 1000.0) / 100
 /// A JSON file, or InputError naming the line where it breaks.
 nlohmann::json readJson(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw InputError(path, "missing or unreadable: not an idyvins run folder ('idyvins run --out DIR' writes it)");
+  if (!in)
+    throw InputError(path, "missing or unreadable: not an idyvins run folder ('idyvins run --out DIR' writes it)");
   const std::string text((std::istreambuf_iterator<char>(in)), {});
   try {
     return nlohmann::json::parse(text);
@@ -39,7 +40,8 @@ nlohmann::json readStats(const std::string& path) {
   nlohmann::json s = readJson(path);
   if (!s.is_object() || !s.contains("frames") || !s["frames"].is_array() || !s.contains("summary") ||
       !s["summary"].is_object() || !s["summary"].contains("first_t_ns") || !s["summary"].contains("mode"))
-    throw InputError(path, "expected an idyvins stats.json: {\"frames\": [...], \"summary\": {\"first_t_ns\", \"mode\", ...}}");
+    throw InputError(
+        path, "expected an idyvins stats.json: {\"frames\": [...], \"summary\": {\"first_t_ns\", \"mode\", ...}}");
   for (const nlohmann::json& f : s["frames"])
     if (!f.is_object() || !f.contains("t_ns") || !f["t_ns"].is_number_integer() || !f.contains("tracking_ms"))
       throw InputError(path, "a frame without t_ns / tracking_ms: " + f.dump().substr(0, 80));
@@ -48,10 +50,10 @@ nlohmann::json readStats(const std::string& path) {
 
 /// Per-frame series (time in s from the first frame), the d_s histogram summed over the run.
 nlohmann::json frameSeries(const nlohmann::json& frames, std::int64_t first_t_ns, nlohmann::json& ds_hist) {
-  static const char* const numeric[] = {"tracking_ms", "filter_ms", "optimization_ms", "marginalization_ms", "features",
-                                        "landmarks"};
-  static const char* const dynamic[] = {"cv_before", "cv_after", "candidates", "eliminated", "candidates_in_window",
-                                        "confirmed_dynamic"};
+  static const char* const numeric[] = {"tracking_ms",        "filter_ms", "optimization_ms",
+                                        "marginalization_ms", "features",  "landmarks"};
+  static const char* const dynamic[] = {
+      "cv_before", "cv_after", "candidates", "eliminated", "candidates_in_window", "confirmed_dynamic"};
   nlohmann::json out = {{"t", nlohmann::json::array()}, {"status", nlohmann::json::array()}};
   std::vector<double> hist(21, 0.0), kept(21, 0.0);
   bool any_dynamic = false;
@@ -61,7 +63,8 @@ nlohmann::json frameSeries(const nlohmann::json& frames, std::int64_t first_t_ns
     for (const char* k : numeric) out[k].push_back(round3(f.value(k, 0.0)));
     const nlohmann::json& d = f.contains("dynamic") ? f["dynamic"] : nlohmann::json();
     any_dynamic = any_dynamic || d.is_object();
-    for (const char* k : dynamic) out[k].push_back(d.is_object() && d.contains(k) ? nlohmann::json(round3(d[k].get<double>())) : nlohmann::json());
+    for (const char* k : dynamic)
+      out[k].push_back(d.is_object() && d.contains(k) ? nlohmann::json(round3(d[k].get<double>())) : nlohmann::json());
     if (!d.is_object()) continue;
     for (std::size_t i = 0; i < 21 && i < d.value("d_s_hist", std::vector<double>{}).size(); ++i) {
       hist[i] += d["d_s_hist"][i].get<double>();
@@ -72,8 +75,11 @@ nlohmann::json frameSeries(const nlohmann::json& frames, std::int64_t first_t_ns
   return out;
 }
 
-nlohmann::json positions(const std::vector<StampedPose>& poses, const eval::Similarity& align, std::int64_t first_t_ns) {
-  nlohmann::json out = {{"t", nlohmann::json::array()}, {"x", nlohmann::json::array()}, {"y", nlohmann::json::array()},
+nlohmann::json positions(const std::vector<StampedPose>& poses, const eval::Similarity& align,
+                         std::int64_t first_t_ns) {
+  nlohmann::json out = {{"t", nlohmann::json::array()},
+                        {"x", nlohmann::json::array()},
+                        {"y", nlohmann::json::array()},
                         {"z", nlohmann::json::array()}};
   for (const StampedPose& p : poses) {
     const Eigen::Vector3d q = align.apply(p.p_w_b);
@@ -91,8 +97,9 @@ void addGroundTruth(nlohmann::json& run, const std::string& dir, const std::vect
                     std::int64_t first_t_ns, eval::Similarity& align, const std::string& fallback) {
   const std::string own = dir + "/groundtruth.tum";
   if (!fs::exists(own) && fallback.empty()) {
-    run["gt_note"] = "no ground truth: the run folder has no groundtruth.tum (the dataset has no ground truth, or an "
-                     "idyvins older than the report wrote the folder; report --groundtruth GT supplies one)";
+    run["gt_note"] =
+        "no ground truth: the run folder has no groundtruth.tum (the dataset has no ground truth, or an "
+        "idyvins older than the report wrote the folder; report --groundtruth GT supplies one)";
     return;
   }
   const std::vector<StampedPose> gt = fs::exists(own) ? io::readTum(own) : io::readReference(fallback);
@@ -101,13 +108,15 @@ void addGroundTruth(nlohmann::json& run, const std::string& dir, const std::vect
   try {
     ate = eval::computeAte(gt, est, eval::AlignMode::kSe3, 10'000'000);
   } catch (const std::exception& e) {
-    run["gt_note"] = std::string("no ground-truth panels: groundtruth.tum does not overlap the trajectory (") + e.what() + ")";
+    run["gt_note"] =
+        std::string("no ground-truth panels: groundtruth.tum does not overlap the trajectory (") + e.what() + ")";
     return;
   }
   align = ate.alignment;
   std::vector<StampedPose> gt_assoc, est_assoc;
   for (const auto& [i, j] : ate.pairs) gt_assoc.push_back(gt[i]), est_assoc.push_back(est[j]);
-  nlohmann::json err = {{"t", nlohmann::json::array()}, {"err", nlohmann::json::array()}, {"dist", nlohmann::json::array()}};
+  nlohmann::json err = {
+      {"t", nlohmann::json::array()}, {"err", nlohmann::json::array()}, {"dist", nlohmann::json::array()}};
   double dist = 0;
   for (std::size_t k = 0; k < ate.errors.size(); ++k) {
     if (k) dist += (gt_assoc[k].p_w_b - gt_assoc[k - 1].p_w_b).norm();
@@ -117,13 +126,14 @@ void addGroundTruth(nlohmann::json& run, const std::string& dir, const std::vect
   }
   run["ate"] = err;
   run["ate_stats"] = {{"rmse", ate.stats.rmse}, {"mean", ate.stats.mean}, {"median", ate.stats.median},
-                      {"max", ate.stats.max}, {"n", ate.stats.n}, {"align", "se3"}};
+                      {"max", ate.stats.max},   {"n", ate.stats.n},       {"align", "se3"}};
   run["gt"] = positions(gt, eval::Similarity{}, first_t_ns);
   run["rpe"] = nlohmann::json::array();
   for (double delta : {1.0, 5.0, 10.0}) {
     try {
       const eval::ErrorStats r = eval::computeRpe(gt_assoc, est_assoc, delta);
-      if (r.n > 0) run["rpe"].push_back({{"delta_m", delta}, {"rmse", r.rmse}, {"mean", r.mean}, {"max", r.max}, {"n", r.n}});
+      if (r.n > 0)
+        run["rpe"].push_back({{"delta_m", delta}, {"rmse", r.rmse}, {"mean", r.mean}, {"max", r.max}, {"n", r.n}});
     } catch (const std::exception&) {  // path shorter than delta
     }
   }
@@ -133,14 +143,16 @@ void addGroundTruth(nlohmann::json& run, const std::string& dir, const std::vect
 nlohmann::json loopEvents(const std::string& path, std::int64_t first_t_ns) {
   std::ifstream in(path);
   if (!in) throw InputError(path, "missing: the run closed loops (summary.loop_closure) but has no loops.csv");
-  nlohmann::json out = {{"t", nlohmann::json::array()}, {"old_t", nlohmann::json::array()}, {"inliers", nlohmann::json::array()}};
+  nlohmann::json out = {
+      {"t", nlohmann::json::array()}, {"old_t", nlohmann::json::array()}, {"inliers", nlohmann::json::array()}};
   std::string line;
   for (int line_no = 1; std::getline(in, line); ++line_no) {
     if (line.empty() || line[0] == '#') continue;
     std::istringstream ss(line);
     long long old_t = 0, new_t = 0, old_kf = 0, new_kf = 0, votes = 0, matches = 0, inliers = 0;
     char c1, c2, c3, c4, c5, c6, c7;
-    if (!(ss >> old_t >> c1 >> new_t >> c2 >> old_kf >> c3 >> new_kf >> c4 >> votes >> c5 >> matches >> c6 >> inliers >> c7) ||
+    if (!(ss >> old_t >> c1 >> new_t >> c2 >> old_kf >> c3 >> new_kf >> c4 >> votes >> c5 >> matches >> c6 >> inliers >>
+          c7) ||
         c1 != ',' || c2 != ',' || c3 != ',' || c4 != ',' || c5 != ',' || c6 != ',' || c7 != ',')
       throw InputError(path, line_no, "expected old_t_ns,new_t_ns,old_keyframe,new_keyframe,votes,matches,inliers,...");
     out["t"].push_back(round3(static_cast<double>(new_t - first_t_ns) * 1e-9));
@@ -162,8 +174,10 @@ nlohmann::json mapLayers(const std::string& dir, const eval::Similarity& align, 
   if (fs::exists(dir + "/map_static_on_moving.ply")) ghosts = io::readPly(dir + "/map_static_on_moving.ply");
   const std::size_t total = pts.size() + loop_pts.size();
   const std::size_t stride = std::max<std::size_t>(1, (total + o.max_map_points - 1) / o.max_map_points);
-  nlohmann::json layers = {{"static", nlohmann::json::array()}, {"eliminated", nlohmann::json::array()},
-                           {"confirmed", nlohmann::json::array()}, {"static_loop", nlohmann::json::array()},
+  nlohmann::json layers = {{"static", nlohmann::json::array()},
+                           {"eliminated", nlohmann::json::array()},
+                           {"confirmed", nlohmann::json::array()},
+                           {"static_loop", nlohmann::json::array()},
                            {"ghosts", nlohmann::json::array()}};
   static const char* const names[] = {"static", "eliminated", "confirmed"};
   const auto add = [&](const std::vector<io::LabelledPoint>& v, bool is_loop, const char* name = nullptr) {
@@ -188,7 +202,8 @@ nlohmann::json mapLayers(const std::string& dir, const eval::Similarity& align, 
 void addLoop(nlohmann::json& run, const std::string& folder, std::int64_t first, eval::Similarity& loop_align) {
   const std::vector<StampedPose> lt = io::readTum(folder + "/trajectory_loop.tum");
   if (run.contains("gt")) try {
-      const eval::AteResult ate = eval::computeAte(io::readReference(run["gt_source"].get<std::string>()), lt, eval::AlignMode::kSe3, 10'000'000);
+      const eval::AteResult ate = eval::computeAte(io::readReference(run["gt_source"].get<std::string>()), lt,
+                                                   eval::AlignMode::kSe3, 10'000'000);
       loop_align = ate.alignment;
       nlohmann::json err = {{"t", nlohmann::json::array()}, {"err", nlohmann::json::array()}};
       for (std::size_t k = 0; k < ate.errors.size(); ++k) {
@@ -209,9 +224,10 @@ nlohmann::json reportRun(const std::string& folder, const ReportOptions& options
   const nlohmann::json stats = readStats(folder + "/stats.json");
   const nlohmann::json& summary = stats["summary"];
   const std::int64_t first = summary["first_t_ns"].get<std::int64_t>();
-  nlohmann::json run = {{"folder", folder}, {"name", fs::path(folder).lexically_normal().filename().string()},
-                        {"summary", summary}};
-  if (run["name"] == "" || run["name"] == ".") run["name"] = fs::absolute(folder).lexically_normal().parent_path().filename().string();
+  nlohmann::json run = {
+      {"folder", folder}, {"name", fs::path(folder).lexically_normal().filename().string()}, {"summary", summary}};
+  if (run["name"] == "" || run["name"] == ".")
+    run["name"] = fs::absolute(folder).lexically_normal().parent_path().filename().string();
   nlohmann::json ds;
   run["frames"] = frameSeries(stats["frames"], first, ds);
   run["ds_hist"] = ds;
@@ -223,8 +239,10 @@ nlohmann::json reportRun(const std::string& folder, const ReportOptions& options
   eval::Similarity loop_align;
   if (loop) addLoop(run, folder, first, loop_align);
   run["maps"] = mapLayers(folder, align, loop ? &loop_align : nullptr, options);
-  if (fs::exists(folder + "/run.json")) run["run"] = readJson(folder + "/run.json");
-  else run["run_note"] = "the folder has no run.json (the command and config): an idyvins older than the report wrote it";
+  if (fs::exists(folder + "/run.json"))
+    run["run"] = readJson(folder + "/run.json");
+  else
+    run["run_note"] = "the folder has no run.json (the command and config): an idyvins older than the report wrote it";
   return run;
 }
 
@@ -237,7 +255,8 @@ nlohmann::json reportData(const std::vector<std::string>& folders, const ReportO
       const nlohmann::json& b = run["summary"];
       if (a["first_t_ns"] != b["first_t_ns"])
         throw InputError(f, "another sequence than " + folders.front() + " (first frame at " + b["first_t_ns"].dump() +
-                                " ns, not " + a["first_t_ns"].dump() + "): a report puts runs of one sequence side by side");
+                                " ns, not " + a["first_t_ns"].dump() +
+                                "): a report puts runs of one sequence side by side");
     }
     data["runs"].push_back(std::move(run));
   }
@@ -246,7 +265,8 @@ nlohmann::json reportData(const std::vector<std::string>& folders, const ReportO
 
 std::string reportHtml(const nlohmann::json& data) {
   std::string json = data.dump();
-  for (std::size_t at = json.find("</"); at != std::string::npos; at = json.find("</", at + 3)) json.insert(at + 1, "\\");
+  for (std::size_t at = json.find("</"); at != std::string::npos; at = json.find("</", at + 3))
+    json.insert(at + 1, "\\");
   std::string page = reportTemplate();
   const auto put = [&page](const std::string& slot, const std::string& text) {
     const std::size_t at = page.find(slot);

@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "io/config.h"
+#include "config/config.h"
 #include "io/open_dataset.h"
 #include "pipeline/system.h"
 

@@ -9,8 +9,8 @@
 #include <string>
 #include <variant>
 
+#include "idyvins/config/config.h"
 #include "idyvins/core/error.h"
-#include "idyvins/io/config.h"
 #include "idyvins/pipeline/run.h"
 #include "idyvins/pipeline/run_outputs.h"
 #include "idyvins/pipeline/system.h"

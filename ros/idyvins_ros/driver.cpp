@@ -12,10 +12,11 @@ Driver::Driver(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Config& config, 
     : config_(config),
       options_(options),
       system_(config, options.run),
-      publisher_(pnh, options.publish, [this](TimeNs t) { return arrival(t); },
-                 config.loop.enabled ? LoopCorrection([this](const imu::NavState& s, Eigen::Vector3d& p,
-                                                             Eigen::Quaterniond& q) { return system_.loopCorrected(s, p, q); })
-                                     : LoopCorrection()) {
+      publisher_(
+          pnh, options.publish, [this](TimeNs t) { return arrival(t); },
+          config.loop.enabled ? LoopCorrection([this](const imu::NavState& s, Eigen::Vector3d& p,
+                                                      Eigen::Quaterniond& q) { return system_.loopCorrected(s, p, q); })
+                              : LoopCorrection()) {
   if (!options.load_map.empty())
     system_.loadMap(map::loadMap(options.load_map), !options.localization_only, options.load_map);
   system_.addObserver(publisher_);
@@ -46,7 +47,8 @@ void Driver::onImu(const sensor_msgs::ImuConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (s.t_ns <= last_imu_ns_) {  // a clock that went back (bag looped, driver restarted): say so
     ++counts_.imu_backwards;
-    ROS_WARN_THROTTLE(5, "idyvins: IMU time went back %.3f s (%zu samples so far not after their predecessor; "
+    ROS_WARN_THROTTLE(5,
+                      "idyvins: IMU time went back %.3f s (%zu samples so far not after their predecessor; "
                       "they are dropped; restart the node after a clock reset)",
                       1e-9 * static_cast<double>(last_imu_ns_ - s.t_ns), counts_.imu_backwards);
   } else {
@@ -74,7 +76,8 @@ void Driver::onImage(int camera, const sensor_msgs::ImageConstPtr& msg) {
   }
   const TimeNs t_ns = static_cast<TimeNs>(msg->header.stamp.toNSec());
   if (t_ns <= last_image_ns_[camera])
-    ROS_WARN_THROTTLE(5, "idyvins: camera %d time went back %.3f s (%zu images so far not after their predecessor; "
+    ROS_WARN_THROTTLE(5,
+                      "idyvins: camera %d time went back %.3f s (%zu images so far not after their predecessor; "
                       "they are dropped; restart the node after a clock reset)",
                       camera, 1e-9 * static_cast<double>(last_image_ns_[camera] - t_ns), sync_.outOfOrder(camera) + 1);
   else

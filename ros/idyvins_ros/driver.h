@@ -16,7 +16,7 @@
 #include <mutex>
 #include <thread>
 
-#include "io/config.h"
+#include "config/config.h"
 #include "io/data_source.h"
 #include "pipeline/stereo_sync.h"
 #include "pipeline/system.h"
@@ -26,7 +26,7 @@ namespace idyvins::ros_node {
 
 struct DriverOptions {
   pipeline::RunOptions run;  ///< sequential (lowest latency) or pipelined (pipeline::applyRunRequest)
-  int queue_frames = 0;    ///< frames waiting for the system beyond which the oldest is dropped (0: never drop)
+  int queue_frames = 0;      ///< frames waiting for the system beyond which the oldest is dropped (0: never drop)
   PublisherOptions publish;
   std::string load_map;            ///< a map saved by `idyvins run --save-map` to relocalize in (loop closure on)
   bool localization_only = false;  ///< with load_map: do not extend the map
@@ -34,12 +34,12 @@ struct DriverOptions {
 
 /// Counters of what did not reach the system.
 struct InputCounts {
-  std::size_t frames_in = 0;            ///< pairs formed
-  std::size_t frames_dropped = 0;       ///< pairs dropped because the queue was full
-  std::size_t unpaired[2] = {0, 0};     ///< images without a partner (left, right)
-  std::size_t out_of_order[2] = {0, 0}; ///< images not after their camera's previous one
-  std::size_t bad_images = 0;           ///< wrong size or encoding
-  std::size_t imu_backwards = 0;        ///< IMU messages not after the previous one (dropped by the system)
+  std::size_t frames_in = 0;             ///< pairs formed
+  std::size_t frames_dropped = 0;        ///< pairs dropped because the queue was full
+  std::size_t unpaired[2] = {0, 0};      ///< images without a partner (left, right)
+  std::size_t out_of_order[2] = {0, 0};  ///< images not after their camera's previous one
+  std::size_t bad_images = 0;            ///< wrong size or encoding
+  std::size_t imu_backwards = 0;         ///< IMU messages not after the previous one (dropped by the system)
 };
 
 class Driver {
@@ -61,7 +61,7 @@ class Driver {
   void onImu(const sensor_msgs::ImuConstPtr& msg);
   void onImage(int camera, const sensor_msgs::ImageConstPtr& msg);
   void push(io::Measurement m);  ///< under the lock
-  void process();            ///< the processing thread
+  void process();                ///< the processing thread
   SteadyTime arrival(TimeNs t_ns);
 
   Config config_;

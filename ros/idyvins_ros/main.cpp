@@ -16,9 +16,9 @@
 #include <memory>
 #include <string>
 
+#include "config/config.h"
 #include "core/error.h"
 #include "driver.h"
-#include "io/config.h"
 #include "pipeline/run.h"
 #include "pipeline/run_outputs.h"
 
@@ -30,7 +30,7 @@ void onSignal(int) { g_stop = true; }
 struct NodeArgs {
   std::string config_file, mode, out;
   bool force = false;  ///< ~force: write into an ~out holding files idyvins did not write (none removed)
-  int threads = 1;  ///< ~threads: 1 (lowest latency) or 2 (pipelined, as `idyvins run`'s default)
+  int threads = 1;     ///< ~threads: 1 (lowest latency) or 2 (pipelined, as `idyvins run`'s default)
   idyvins::ros_node::DriverOptions driver;
 };
 
@@ -127,7 +127,8 @@ int runNode(int argc, char** argv) {
   if (outputs)
     for (idyvins::pipeline::FrameObserver* o : outputs->observers()) driver.addObserver(*o);
   ROS_INFO("idyvins: mode %s, %d thread(s); listening to %s, %s, %s", idyvins::toString(config.mode),
-           driver.system().threads(), config.imu_topic.c_str(), config.image0_topic.c_str(), config.image1_topic.c_str());
+           driver.system().threads(), config.imu_topic.c_str(), config.image0_topic.c_str(),
+           config.image1_topic.c_str());
   ros::AsyncSpinner spinner(1);
   spinner.start();
   while (!g_stop && ros::ok()) ros::WallDuration(0.02).sleep();

@@ -3,12 +3,12 @@
 // odometry, path and TF, the static and dynamic maps, the labelled feature image and the
 // frame's timing. Topic names and types: docs/ros.md.
 
+#include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include <chrono>
 #include <functional>
-#include <nav_msgs/Path.h>
 #include <string>
 #include <vector>
 

@@ -81,20 +81,7 @@ std::unique_ptr<imu::Preintegration> Estimator::integrate(TimeNs t0, TimeNs t1, 
   return std::make_unique<imu::Preintegration>(imu::integrateBetween(w_.imu, t0, t1, from.ba, from.bg, noise_));
 }
 
-FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
-  FrameResult r;
-  r.t_ns = ff.t_ns;
-  r.td_s = w_.td_s;
-  if (w_.count >= 0 && ff.t_ns <= w_.frames[w_.count].t_ns) {
-    r.status = "skipped: time stamp not after the previous frame";
-    return r;
-  }
-  // A gap the integration cannot bridge ends the segment: this frame starts a new window.
-  if (const std::string why = w_.count >= 0 ? bridgeProblem(ff.t_ns) : std::string(); !why.empty()) {
-    r.reset = w_.initialized;
-    r.reset_why = why;
-    if (w_.initialized) resetAfterFailure(); else resetWindow();
-  }
+bool Estimator::pushFrame(const frontend::FeatureFrame& ff) {
   const int n = w_.count + 1;
   WindowFrame& f = w_.frames[n];
   f.t_ns = ff.t_ns;
@@ -107,7 +94,27 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     f.setNav(f.pre->predict(prev));
   }
   w_.count = n;
-  r.keyframe = w_.fm.addFrame(n, ff, options_.keyframe_parallax_px, rig_.focal_px, map_.dynamic_ids);
+  return w_.fm.addFrame(n, ff, options_.keyframe_parallax_px, rig_.focal_px, map_.dynamic_ids);
+}
+
+FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
+  FrameResult r;
+  r.t_ns = ff.t_ns;
+  r.td_s = w_.td_s;
+  if (w_.count >= 0 && ff.t_ns <= w_.frames[w_.count].t_ns) {
+    r.status = "skipped: time stamp not after the previous frame";
+    return r;
+  }
+  // A gap the integration cannot bridge ends the segment: this frame starts a new window.
+  if (const std::string why = w_.count >= 0 ? bridgeProblem(ff.t_ns) : std::string(); !why.empty()) {
+    r.reset = w_.initialized;
+    r.reset_why = why;
+    if (w_.initialized)
+      resetAfterFailure();
+    else
+      resetWindow();
+  }
+  r.keyframe = pushFrame(ff);
 
   if (!w_.initialized) {
     if (!initStep(r)) return r;

@@ -2,11 +2,11 @@
 // landmarks checked against the gyroscope, the time offset from the rotations (estimate_td),
 // gyroscope bias, gravity and velocities from the IMU.
 
-#include "backend/estimator.h"
-
+#include <Eigen/Core>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include "backend/estimator.h"
 #include "backend/initializer.h"
 
 namespace idyvins::backend {
@@ -25,8 +25,8 @@ bool Estimator::initStep(FrameResult& r) {
       return false;
     }
     // Check the visual rotation against the gyroscope before accepting the frame.
-    const Quaterniond q_vis = Quaterniond(w_.frames[n - 1].T_w_b().linear()).conjugate() *
-                              Quaterniond(w_.frames[n].T_w_b().linear());
+    const Quaterniond q_vis =
+        Quaterniond(w_.frames[n - 1].T_w_b().linear()).conjugate() * Quaterniond(w_.frames[n].T_w_b().linear());
     const double diff_deg = q_vis.angularDistance(w_.frames[n].pre->deltaQ()) * 180.0 / M_PI;
     if (diff_deg > options_.init_rotation_check_deg) {
       r.status = "initializing: PnP rotation disagrees with the gyroscope, restarting";

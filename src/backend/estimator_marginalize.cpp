@@ -2,13 +2,12 @@
 // its landmarks' projections) or the second newest frame dropped; the keyframe that leaves, for
 // the loop closer; the IMU samples no longer needed.
 
-#include "backend/estimator.h"
-
 #include <ceres/loss_function.h>
 
 #include <deque>
 #include <unordered_map>
 
+#include "backend/estimator.h"
 #include "backend/imu_factor.h"
 #include "backend/landmark_factors.h"
 
@@ -66,8 +65,10 @@ void Estimator::marginalizeOldest() {
       m.add({std::make_shared<MarginalizationFactor>(w_.prior), nullptr, w_.prior->blocks, drop});
     }
     if (w_.frames[1].pre && w_.frames[1].pre->sumDt() <= 10.0)
-      m.add({std::make_shared<ImuFactor>(w_.frames[1].pre.get()), nullptr,
-             {pose0, sb0, w_.frames[1].pose.data(), w_.frames[1].sb.data()}, {0, 1}});
+      m.add({std::make_shared<ImuFactor>(w_.frames[1].pre.get()),
+             nullptr,
+             {pose0, sb0, w_.frames[1].pose.data(), w_.frames[1].sb.data()},
+             {0, 1}});
     auto huber = std::make_shared<ceres::HuberLoss>(options_.huber_px);
     const ProjectionWeight w{rig_.focal_px, options_.sigma_px, nullptr};
     std::deque<double> shares;  // the projection weights point at them until marginalize()
@@ -79,10 +80,11 @@ void Estimator::marginalizeOldest() {
         for (int j = 0; j <= lm.endFrame(); ++j) share_of_frame[j] = &shares.back();
       }
       // The prior keeps no information on the time offset: the marginalized observations are
-      // moved to the current estimate (measured: a prior that kept it held td near its first values).
+      // moved to the current estimate (a prior that kept it would hold td near its first values).
       const TdUse td = estimatesTd() ? TdUse{false, w_.td_s} : TdUse{};
       for (const auto& lf : landmarkFactors(lm, rig_, w, td, share_of_frame, estimatesRays()))
-        m.add({lf.cost, huber, factorBlocks(lm, lf.frame, false), lf.frame < 0 ? std::vector<int>{0} : std::vector<int>{0, 2}});
+        m.add({lf.cost, huber, factorBlocks(lm, lf.frame, false),
+               lf.frame < 0 ? std::vector<int>{0} : std::vector<int>{0, 2}});
     }
     w_.prior = std::make_shared<MarginalizationPrior>(m.marginalize());
     if (options_.prior_fading < 1.0) w_.prior->scaleInformation(options_.prior_fading);
@@ -91,7 +93,7 @@ void Estimator::marginalizeOldest() {
   if (w_.initialized) leaving_ = leavingKeyframe();
   for (const auto& [id, lm] : w_.fm.landmarks())
     if (lm.start_frame == 0 && lm.endFrame() < w_.count) addToStaticMap(lm);  // leaves the window
-  std::vector<Isometry3d> T_w_b;  // before the slide
+  std::vector<Isometry3d> T_w_b;                                              // before the slide
   for (int i = 0; i <= kWindowSize; ++i) T_w_b.push_back(w_.frames[i].T_w_b());
   std::unordered_map<double*, double*> remap;
   for (int i = 0; i < kWindowSize; ++i) {
@@ -130,8 +132,9 @@ void Estimator::dropSecondNewest() {
   w_.frames[k].pre = merged ? std::move(merged) : std::move(w_.frames[newest].pre);
   w_.frames[newest].pre.reset();
   w_.fm.removeFrame(k);
-  if (w_.prior) w_.prior->remap({{w_.frames[newest].pose.data(), w_.frames[k].pose.data()},
-                             {w_.frames[newest].sb.data(), w_.frames[k].sb.data()}});
+  if (w_.prior)
+    w_.prior->remap({{w_.frames[newest].pose.data(), w_.frames[k].pose.data()},
+                     {w_.frames[newest].sb.data(), w_.frames[k].sb.data()}});
   w_.count = kWindowSize - 1;
 }
 }  // namespace idyvins::backend

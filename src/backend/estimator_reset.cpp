@@ -2,7 +2,6 @@
 // from the last good state (its biases when they had settled), moved onto it across the gap.
 
 #include "backend/estimator.h"
-
 #include "backend/gauge.h"
 
 namespace idyvins::backend {
@@ -44,8 +43,10 @@ std::string Estimator::reanchor() {
       w_.imu.begin());
   if (k == 0) {  // no sample at or before the last good state: held up to the first one
     held = true;
-    if (n == 0) k = n;
-    else t = std::min(t_end, w_.imu[0].t_ns);
+    if (n == 0)
+      k = n;
+    else
+      t = std::min(t_end, w_.imu[0].t_ns);
   } else {
     --k;  // the last sample at or before t
   }

@@ -2,14 +2,13 @@
 // IMU and projection factors (candidates weighted 1/m_j, refreshed every iteration, DESIGN
 // §4.5), Ceres, then the gauge restored and the preintegrations repropagated.
 
-#include "backend/estimator.h"
-
 #include <ceres/ceres.h>
 
 #include <chrono>
 #include <deque>
 #include <functional>
 
+#include "backend/estimator.h"
 #include "backend/gauge.h"
 #include "backend/imu_factor.h"
 #include "backend/landmark_factors.h"
@@ -59,7 +58,7 @@ void Estimator::optimize(FrameResult& r) {
   o.max_num_iterations = options_.max_num_iterations;
   o.function_tolerance = options_.function_tolerance;
   if (options_.time_limited) o.max_solver_time_in_seconds = options_.max_solver_time_s;  // live only
-  o.num_threads = 1;  // deterministic
+  o.num_threads = 1;                                                                     // deterministic
   const Isometry3d T_w_b0_before = w_.frames[0].T_w_b();
   const auto solve_start = std::chrono::steady_clock::now();
   ceres::Solver::Summary summary;
@@ -113,8 +112,8 @@ int Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_p
   for (int i = 1; i <= w_.count; ++i) {
     if (w_.frames[i].pre->sumDt() > 10.0) continue;
     costs.push_back(std::make_shared<ImuFactor>(w_.frames[i].pre.get()));
-    const std::vector<double*> blocks{w_.frames[i - 1].pose.data(), w_.frames[i - 1].sb.data(), w_.frames[i].pose.data(),
-                                      w_.frames[i].sb.data()};
+    const std::vector<double*> blocks{w_.frames[i - 1].pose.data(), w_.frames[i - 1].sb.data(),
+                                      w_.frames[i].pose.data(), w_.frames[i].sb.data()};
     if (finiteAt(*costs.back(), blocks))
       problem.AddResidualBlock(costs.back().get(), nullptr, blocks);
     else
@@ -145,8 +144,7 @@ std::vector<double*> Estimator::factorBlocks(Landmark& lm, int frame, bool with_
 }
 
 int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
-                              ceres::LossFunction& huber, std::deque<CandidateWeight>& weights,
-                              int& candidates) {
+                              ceres::LossFunction& huber, std::deque<CandidateWeight>& weights, int& candidates) {
   const ProjectionWeight w{rig_.focal_px, options_.sigma_px, nullptr};
   int used = 0;
   for (auto& [id, lm] : w_.fm.landmarks()) {

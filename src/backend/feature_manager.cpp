@@ -14,7 +14,7 @@ using Eigen::Vector3d;
 
 namespace {
 constexpr double kMinDepth = 0.1, kMaxDepth = 80.0;
-constexpr double kReanchorHuberPx = 1.5;  ///< the projection factors' Huber threshold (1 at sigma 1.5 px)
+constexpr double kReanchorHuberPx = 1.5;  ///< px, Huber threshold of a re-anchored landmark's multi-view triangulation
 
 /// One Gauss-Newton step of triangulateViews (errors above `huber` down-weighted, 0: none);
 /// false when a view sees the point behind it.
@@ -97,8 +97,8 @@ Vector3d triangulateTwoViews(const Isometry3d& T_w_c0, const Vector2d& xy0, cons
   return X.head<3>() / X(3);
 }
 
-bool FeatureManager::addFrame(int frame, const frontend::FeatureFrame& ff, double keyframe_parallax_px,
-                              double focal_px, const std::set<std::uint64_t>& excluded) {
+bool FeatureManager::addFrame(int frame, const frontend::FeatureFrame& ff, double keyframe_parallax_px, double focal_px,
+                              const std::set<std::uint64_t>& excluded) {
   int tracked = 0, new_features = 0, long_tracks = 0;
   for (const auto& f : ff.features) {
     if (excluded.count(f.id)) continue;

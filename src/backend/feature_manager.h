@@ -17,10 +17,10 @@ namespace idyvins::backend {
 
 /// One observation of a landmark in one window frame.
 struct Observation {
-  Eigen::Vector2d xy = Eigen::Vector2d::Zero();        ///< left normalized
-  Eigen::Vector2d uv = Eigen::Vector2d::Zero();        ///< left pixel
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();  ///< left normalized
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();  ///< left pixel
   bool has_right = false;
-  Eigen::Vector2d xy_right = Eigen::Vector2d::Zero();  ///< right normalized
+  Eigen::Vector2d xy_right = Eigen::Vector2d::Zero();        ///< right normalized
   Eigen::Vector2d velocity = Eigen::Vector2d::Zero();        ///< left, normalized plane, 1/s
   Eigen::Vector2d velocity_right = Eigen::Vector2d::Zero();  ///< right, normalized plane, 1/s
   double td_s = 0;  ///< time offset the frame was stamped with (FeatureFrame::td_s)

@@ -26,9 +26,8 @@ imu::NavState navStateFromBlocks(const double* pose, const double* sb) {
 }
 
 void imuResidual(const imu::Preintegration& pre, const imu::NavState& si, const imu::NavState& sj,
-                 imu::Vector15* residual, Eigen::Matrix<double, 15, 6>* d_pose_i,
-                 Eigen::Matrix<double, 15, 9>* d_sb_i, Eigen::Matrix<double, 15, 6>* d_pose_j,
-                 Eigen::Matrix<double, 15, 9>* d_sb_j) {
+                 imu::Vector15* residual, Eigen::Matrix<double, 15, 6>* d_pose_i, Eigen::Matrix<double, 15, 9>* d_sb_i,
+                 Eigen::Matrix<double, 15, 6>* d_pose_j, Eigen::Matrix<double, 15, 9>* d_sb_j) {
   if (residual) *residual = pre.residual(si, sj);
   if (!d_pose_i && !d_sb_i && !d_pose_j && !d_sb_j) return;
   const double T = pre.sumDt();
@@ -81,17 +80,15 @@ ImuFactor::ImuFactor(const imu::Preintegration* pre) : pre_(pre) {
   sqrt_info_ = Eigen::LLT<imu::Matrix15>(0.5 * (info + info.transpose())).matrixL().transpose();
 }
 
-bool ImuFactor::Evaluate(double const* const* parameters, double* residuals,
-                         double** jacobians) const {
+bool ImuFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   const imu::NavState si = navStateFromBlocks(parameters[0], parameters[1]);
   const imu::NavState sj = navStateFromBlocks(parameters[2], parameters[3]);
   imu::Vector15 r;
   Eigen::Matrix<double, 15, 6> Jpi, Jpj;
   Eigen::Matrix<double, 15, 9> Jsi, Jsj;
   const bool want = jacobians != nullptr;
-  imuResidual(*pre_, si, sj, &r, want && jacobians[0] ? &Jpi : nullptr,
-              want && jacobians[1] ? &Jsi : nullptr, want && jacobians[2] ? &Jpj : nullptr,
-              want && jacobians[3] ? &Jsj : nullptr);
+  imuResidual(*pre_, si, sj, &r, want && jacobians[0] ? &Jpi : nullptr, want && jacobians[1] ? &Jsi : nullptr,
+              want && jacobians[2] ? &Jpj : nullptr, want && jacobians[3] ? &Jsj : nullptr);
   Eigen::Map<imu::Vector15> r_out(residuals);
   r_out = sqrt_info_ * r;
   if (!want) return true;
@@ -120,7 +117,8 @@ bool ImuFactor::Evaluate(double const* const* parameters, double* residuals,
 
 BiasPriorFactor::BiasPriorFactor(const Vector3d& ba0, const Vector3d& bg0, double sigma_acc, double sigma_gyr) {
   b0_ << ba0, bg0;
-  w_ << Vector3d::Constant(sigma_acc > 0 ? 1.0 / sigma_acc : 0.0), Vector3d::Constant(sigma_gyr > 0 ? 1.0 / sigma_gyr : 0.0);
+  w_ << Vector3d::Constant(sigma_acc > 0 ? 1.0 / sigma_acc : 0.0),
+      Vector3d::Constant(sigma_gyr > 0 ? 1.0 / sigma_gyr : 0.0);
 }
 
 bool BiasPriorFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {

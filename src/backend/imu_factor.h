@@ -10,9 +10,8 @@ namespace idyvins::backend {
 /// Residual and tangent Jacobians of the IMU factor (unweighted). Jacobians are
 /// 15x6 for poses (tangent [δp, δθ]) and 15x9 for speed/bias; any may be null.
 void imuResidual(const imu::Preintegration& pre, const imu::NavState& si, const imu::NavState& sj,
-                 imu::Vector15* residual, Eigen::Matrix<double, 15, 6>* d_pose_i,
-                 Eigen::Matrix<double, 15, 9>* d_sb_i, Eigen::Matrix<double, 15, 6>* d_pose_j,
-                 Eigen::Matrix<double, 15, 9>* d_sb_j);
+                 imu::Vector15* residual, Eigen::Matrix<double, 15, 6>* d_pose_i, Eigen::Matrix<double, 15, 9>* d_sb_i,
+                 Eigen::Matrix<double, 15, 6>* d_pose_j, Eigen::Matrix<double, 15, 9>* d_sb_j);
 
 /// Ceres wrapper. Blocks: pose_i (7), speed_bias_i (9), pose_j (7), speed_bias_j (9).
 /// Weighted by the square-root information of the preintegration covariance,
@@ -20,9 +19,7 @@ void imuResidual(const imu::Preintegration& pre, const imu::NavState& si, const 
 class ImuFactor final : public ceres::SizedCostFunction<15, 7, 9, 7, 9> {
  public:
   explicit ImuFactor(const imu::Preintegration* pre);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
-  const imu::Matrix15& sqrtInformation() const { return sqrt_info_; }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   const imu::Preintegration* pre_;
@@ -38,8 +35,7 @@ class ImuFactor final : public ceres::SizedCostFunction<15, 7, 9, 7, 9> {
 class BiasPriorFactor final : public ceres::SizedCostFunction<6, 9> {
  public:
   BiasPriorFactor(const Eigen::Vector3d& ba0, const Eigen::Vector3d& bg0, double sigma_acc, double sigma_gyr);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   Eigen::Matrix<double, 6, 1> b0_;

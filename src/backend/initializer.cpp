@@ -24,8 +24,8 @@ Vector3d solveGyroBias(const std::vector<Eigen::Quaterniond>& q, const std::vect
   return A.ldlt().solve(b);
 }
 
-Alignment alignVelocityGravity(const std::vector<Eigen::Isometry3d>& T, const std::vector<const imu::Preintegration*>& pre,
-                               double g_norm) {
+Alignment alignVelocityGravity(const std::vector<Eigen::Isometry3d>& T,
+                               const std::vector<const imu::Preintegration*>& pre, double g_norm) {
   const int n = static_cast<int>(T.size());
   const int dim = 3 * n + 3;
   Alignment out;
@@ -74,7 +74,8 @@ std::optional<double> alignRotationTimes(const std::vector<Eigen::Quaterniond>& 
   const TimeNs max_ns = static_cast<TimeNs>(std::llround(max_shift_s * 1e9));
   std::vector<std::size_t> pairs;  // i: the pair (i − 1, i)
   for (std::size_t i = 1; i < t.size(); ++i)
-    if (t[i - 1] - max_ns >= imu.front().t_ns && t[i] + max_ns <= imu.back().t_ns && t[i] > t[i - 1]) pairs.push_back(i);
+    if (t[i - 1] - max_ns >= imu.front().t_ns && t[i] + max_ns <= imu.back().t_ns && t[i] > t[i - 1])
+      pairs.push_back(i);
   if (pairs.size() < 3) return std::nullopt;
   const ImuNoise noise;
   const Vector3d zero = Vector3d::Zero();

@@ -23,8 +23,7 @@ Eigen::Vector3d solveGyroBias(const std::vector<Eigen::Quaterniond>& q_w_b,
 /// Consecutive pairs whose shifted intervals the samples do not cover for every δ are left
 /// out. nullopt when fewer than 3 pairs remain or the best shift lies on the range's edge.
 std::optional<double> alignRotationTimes(const std::vector<Eigen::Quaterniond>& q_w_b, const std::vector<TimeNs>& t_ns,
-                                         const std::vector<ImuSample>& imu, double max_shift_s,
-                                         double step_s = 0.001);
+                                         const std::vector<ImuSample>& imu, double max_shift_s, double step_s = 0.001);
 
 /// Result of the linear alignment.
 struct Alignment {

@@ -41,8 +41,8 @@ std::vector<LandmarkFactor> landmarkFactors(const Landmark& lm, const Rig& rig, 
     return td.moved_to ? Vector2d(o.xy - (*td.moved_to - o.td_obs) * o.velocity) : o.xy;
   };
   const TimedObservation a_left = TimedObservation{a.xy, a.velocity, a.td_s};
-  auto twoFrame = [&](const TimedObservation& target, const Extrinsic& cam, const ProjectionWeight& w)
-      -> std::shared_ptr<ceres::CostFunction> {
+  auto twoFrame = [&](const TimedObservation& target, const Extrinsic& cam,
+                      const ProjectionWeight& w) -> std::shared_ptr<ceres::CostFunction> {
     if (td.block) return std::make_shared<ProjectionTwoFrameTd>(a_left, target, rig.T_b_c0, cam, w);
     return std::make_shared<ProjectionTwoFrame>(at(a_left), at(target), rig.T_b_c0, cam, w);
   };
@@ -58,7 +58,8 @@ std::vector<LandmarkFactor> landmarkFactors(const Landmark& lm, const Rig& rig, 
     if (k > 0) {
       out.push_back({twoFrame(right, rig.T_b_c1, w), frame});
     } else if (td.block) {
-      out.push_back({std::make_shared<ProjectionOneFrameTwoCamTd>(a_left, right, rig.T_b_c0, rig.T_b_c1, w_static), -1});
+      out.push_back(
+          {std::make_shared<ProjectionOneFrameTwoCamTd>(a_left, right, rig.T_b_c0, rig.T_b_c1, w_static), -1});
     } else {
       out.push_back(
           {std::make_shared<ProjectionOneFrameTwoCam>(at(a_left), at(right), rig.T_b_c0, rig.T_b_c1, w_static), -1});
@@ -68,6 +69,5 @@ std::vector<LandmarkFactor> landmarkFactors(const Landmark& lm, const Rig& rig, 
 }
 
 bool inSolve(const Landmark& lm) { return lm.usable() && std::isfinite(lm.inv_depth); }
-
 
 }  // namespace idyvins::backend

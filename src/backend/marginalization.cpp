@@ -94,11 +94,10 @@ BlockOrder orderBlocks(const std::vector<MarginalizationTerm>& terms) {
       if (std::find(list.begin(), list.end(), t.blocks[k]) == list.end()) list.push_back(t.blocks[k]);
     }
   }
-  o.kept.erase(std::remove_if(o.kept.begin(), o.kept.end(),
-                              [&](double* b) {
-                                return std::find(o.dropped.begin(), o.dropped.end(), b) != o.dropped.end();
-                              }),
-               o.kept.end());
+  o.kept.erase(
+      std::remove_if(o.kept.begin(), o.kept.end(),
+                     [&](double* b) { return std::find(o.dropped.begin(), o.dropped.end(), b) != o.dropped.end(); }),
+      o.kept.end());
   for (double* b : o.dropped) {
     o.index[b] = o.m;
     o.m += tangentSize(o.size_of[b]);
@@ -111,8 +110,7 @@ BlockOrder orderBlocks(const std::vector<MarginalizationTerm>& terms) {
 }
 
 /// The Gauss-Newton system H δ = -g of all terms in the block order.
-void accumulate(const std::vector<MarginalizationTerm>& terms, BlockOrder& o, Eigen::MatrixXd& H,
-                Eigen::VectorXd& g) {
+void accumulate(const std::vector<MarginalizationTerm>& terms, BlockOrder& o, Eigen::MatrixXd& H, Eigen::VectorXd& g) {
   H = Eigen::MatrixXd::Zero(o.m + o.n, o.m + o.n);
   g = Eigen::VectorXd::Zero(o.m + o.n);
   for (const auto& t : terms) {
@@ -154,8 +152,7 @@ MarginalizationPrior Marginalizer::marginalize(double eps) const {
   // A = J0ᵀ J0 and b = J0ᵀ r0.
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es2(A);
   const Eigen::VectorXd S = (es2.eigenvalues().array() > eps).select(es2.eigenvalues().array(), 0.0);
-  const Eigen::VectorXd S_inv =
-      (es2.eigenvalues().array() > eps).select(es2.eigenvalues().array().inverse(), 0.0);
+  const Eigen::VectorXd S_inv = (es2.eigenvalues().array() > eps).select(es2.eigenvalues().array().inverse(), 0.0);
   MarginalizationPrior prior;
   prior.J0 = S.cwiseSqrt().asDiagonal() * es2.eigenvectors().transpose();
   prior.r0 = S_inv.cwiseSqrt().asDiagonal() * es2.eigenvectors().transpose() * b;
@@ -175,8 +172,7 @@ MarginalizationFactor::MarginalizationFactor(std::shared_ptr<const Marginalizati
   set_num_residuals(static_cast<int>(prior_->r0.size()));
 }
 
-bool MarginalizationFactor::Evaluate(double const* const* parameters, double* residuals,
-                                     double** jacobians) const {
+bool MarginalizationFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   const auto& p = *prior_;
   const int n = static_cast<int>(p.J0.cols());
   Eigen::VectorXd dx(n);
@@ -191,8 +187,8 @@ bool MarginalizationFactor::Evaluate(double const* const* parameters, double* re
   for (std::size_t k = 0; k < p.sizes.size(); ++k) {
     const int ts = p.tangent_sizes[k];
     if (jacobians[k]) {
-      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
-          jacobians[k], p.r0.size(), p.sizes[k]);
+      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jacobians[k], p.r0.size(),
+                                                                                           p.sizes[k]);
       J.setZero();
       if (p.sizes[k] == kPoseSize) {
         // d(2 vec(q0⁻¹ q Exp(δθ)))/dδθ = qLeft(q0⁻¹ q) bottom-right block.

@@ -26,11 +26,11 @@ struct MarginalizationTerm {
 /// blocks, with Δx the tangent difference to the linearization point x0. Pose
 /// blocks (size 7) use Δx = [p − p0, 2 vec(q0⁻¹ q)]; other blocks x − x0.
 struct MarginalizationPrior {
-  std::vector<double*> blocks;        ///< addresses of the kept blocks (for the next problem)
-  std::vector<int> sizes;             ///< ambient sizes
-  std::vector<int> tangent_sizes;     ///< 6 for poses, else = size
-  std::vector<Eigen::VectorXd> x0;    ///< linearization values
-  Eigen::MatrixXd J0;                 ///< rows x sum(tangent_sizes)
+  std::vector<double*> blocks;      ///< addresses of the kept blocks (for the next problem)
+  std::vector<int> sizes;           ///< ambient sizes
+  std::vector<int> tangent_sizes;   ///< 6 for poses, else = size
+  std::vector<Eigen::VectorXd> x0;  ///< linearization values
+  Eigen::MatrixXd J0;               ///< rows x sum(tangent_sizes)
   Eigen::VectorXd r0;
   /// Replaces block addresses (after the window slides); unknown ones are kept.
   void remap(const std::unordered_map<double*, double*>& old_to_new);
@@ -55,8 +55,7 @@ class Marginalizer {
 class MarginalizationFactor final : public ceres::CostFunction {
  public:
   explicit MarginalizationFactor(std::shared_ptr<const MarginalizationPrior> prior);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   std::shared_ptr<const MarginalizationPrior> prior_;

@@ -31,18 +31,15 @@ double ProjectionWeight::sqrtInfo() const {
   return info_scale ? base * std::sqrt(*info_scale) : base;
 }
 
-Vector3d transferPoint(const Vector3d& pts_i, double inv_depth, const Vector3d& p_i,
-                       const Quaterniond& q_i, const Vector3d& p_j, const Quaterniond& q_j,
-                       const Extrinsic& cam_a, const Extrinsic& cam_b) {
+Vector3d transferPoint(const Vector3d& pts_i, double inv_depth, const Vector3d& p_i, const Quaterniond& q_i,
+                       const Vector3d& p_j, const Quaterniond& q_j, const Extrinsic& cam_a, const Extrinsic& cam_b) {
   const Vector3d pts_w = q_i * (cam_a.q_b_c * (pts_i / inv_depth) + cam_a.t_b_c) + p_i;
   return cam_b.q_b_c.conjugate() * (q_j.conjugate() * (pts_w - p_j) - cam_b.t_b_c);
 }
 
-ProjectionTwoFrame::ProjectionTwoFrame(const Vector2d& xy_i, const Vector2d& xy_j,
-                                       const Extrinsic& T_b_c0, const Extrinsic& T_b_cb,
-                                       const ProjectionWeight& weight)
-    : pts_i_(homogeneous(xy_i)), pts_j_(homogeneous(xy_j)), ex0_(T_b_c0), exb_(T_b_cb),
-      weight_(weight) {}
+ProjectionTwoFrame::ProjectionTwoFrame(const Vector2d& xy_i, const Vector2d& xy_j, const Extrinsic& T_b_c0,
+                                       const Extrinsic& T_b_cb, const ProjectionWeight& weight)
+    : pts_i_(homogeneous(xy_i)), pts_j_(homogeneous(xy_j)), ex0_(T_b_c0), exb_(T_b_cb), weight_(weight) {}
 
 namespace {
 
@@ -99,17 +96,14 @@ bool evaluateTwoFrame(const Vector3d& pts_i, const Vector3d& pts_j, const Extrin
 
 }  // namespace
 
-bool ProjectionTwoFrame::Evaluate(double const* const* parameters, double* residuals,
-                                  double** jacobians) const {
+bool ProjectionTwoFrame::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   return evaluateTwoFrame(pts_i_, pts_j_, ex0_, exb_, weight_, parameters, residuals, jacobians);
 }
-
 
 ProjectionOneFrameTwoCam::ProjectionOneFrameTwoCam(const Vector2d& xy_left, const Vector2d& xy_right,
                                                    const Extrinsic& T_b_c0, const Extrinsic& T_b_c1,
                                                    const ProjectionWeight& weight)
-    : pts_i_(homogeneous(xy_left)), pts_j_(homogeneous(xy_right)), ex0_(T_b_c0), ex1_(T_b_c1),
-      weight_(weight) {}
+    : pts_i_(homogeneous(xy_left)), pts_j_(homogeneous(xy_right)), ex0_(T_b_c0), ex1_(T_b_c1), weight_(weight) {}
 
 namespace {
 
@@ -126,8 +120,8 @@ bool evaluateOneFrameTwoCam(const Vector3d& pts_i, const Vector3d& pts_j, const 
   r = sqrt_info * (pts_cam_j.head<2>() / pts_cam_j.z() - pts_j.head<2>());
   if (jacobians && jacobians[0]) {
     Eigen::Map<Vector2d> J(jacobians[0]);
-    J = reduceJacobian(pts_cam_j, sqrt_info) * ex1.q_b_c.conjugate().toRotationMatrix() *
-        ex0.q_b_c.toRotationMatrix() * pts_i * (-1.0 / (inv_dep * inv_dep));
+    J = reduceJacobian(pts_cam_j, sqrt_info) * ex1.q_b_c.conjugate().toRotationMatrix() * ex0.q_b_c.toRotationMatrix() *
+        pts_i * (-1.0 / (inv_dep * inv_dep));
   }
   if (jacobians && d_pts_i)
     *d_pts_i = reduceJacobian(pts_cam_j, sqrt_info) * ex1.q_b_c.conjugate().toRotationMatrix() *
@@ -137,17 +131,14 @@ bool evaluateOneFrameTwoCam(const Vector3d& pts_i, const Vector3d& pts_j, const 
 
 }  // namespace
 
-bool ProjectionOneFrameTwoCam::Evaluate(double const* const* parameters, double* residuals,
-                                        double** jacobians) const {
+bool ProjectionOneFrameTwoCam::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   return evaluateOneFrameTwoCam(pts_i_, pts_j_, ex0_, ex1_, weight_, parameters, residuals, jacobians);
 }
 
 namespace {
 
 /// The observation moved to the current time offset td, homogeneous.
-Vector3d atOffset(const TimedObservation& o, double td) {
-  return homogeneous(o.xy - (td - o.td_obs) * o.velocity);
-}
+Vector3d atOffset(const TimedObservation& o, double td) { return homogeneous(o.xy - (td - o.td_obs) * o.velocity); }
 
 Vector3d velocity3(const TimedObservation& o) { return Vector3d(o.velocity.x(), o.velocity.y(), 0.0); }
 
@@ -158,8 +149,7 @@ ProjectionTwoFrameTd::ProjectionTwoFrameTd(const TimedObservation& obs_i, const 
                                            const ProjectionWeight& weight)
     : i_(obs_i), j_(obs_j), ex0_(T_b_c0), exb_(T_b_cb), weight_(weight) {}
 
-bool ProjectionTwoFrameTd::Evaluate(double const* const* parameters, double* residuals,
-                                    double** jacobians) const {
+bool ProjectionTwoFrameTd::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   const double td = parameters[3][0];
   const Vector3d pts_i = atOffset(i_, td), pts_j = atOffset(j_, td);
   // The residual and the pose and depth Jacobians are the fixed-offset factor's at the moved

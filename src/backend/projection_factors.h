@@ -1,6 +1,6 @@
 #pragma once
 // Reprojection factors with inverse depth (VINS-Fusion's three): residuals on the
-// normalized image plane, weighted by focal/σ_px (σ_px = 1.5 px by default) and by
+// normalized image plane, weighted by focal/σ_px (σ_px: EstimatorOptions::sigma_px) and by
 // a per-observation information scale that may change at run time.
 
 #include <ceres/sized_cost_function.h>
@@ -20,8 +20,8 @@ struct Extrinsic {
 /// info_scale points at a value the estimator owns and may change between solver
 /// iterations (dynamic-candidate weights 1/m_j, DESIGN §4.5); null means 1.
 struct ProjectionWeight {
-  double focal_px = 460.0;
-  double sigma_px = 1.5;
+  double focal_px;  ///< the camera's focal length, px
+  double sigma_px;  ///< pixel noise, px (EstimatorOptions::sigma_px)
   const double* info_scale = nullptr;
   double sqrtInfo() const;
 };
@@ -31,11 +31,9 @@ struct ProjectionWeight {
 /// (T_b_cb = T_b_c1, "two frames two cameras"). Blocks: pose_i (7), pose_j (7), inv_depth (1).
 class ProjectionTwoFrame final : public ceres::SizedCostFunction<2, 7, 7, 1> {
  public:
-  ProjectionTwoFrame(const Eigen::Vector2d& xy_i, const Eigen::Vector2d& xy_j,
-                     const Extrinsic& T_b_c0, const Extrinsic& T_b_cb,
-                     const ProjectionWeight& weight);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+  ProjectionTwoFrame(const Eigen::Vector2d& xy_i, const Eigen::Vector2d& xy_j, const Extrinsic& T_b_c0,
+                     const Extrinsic& T_b_cb, const ProjectionWeight& weight);
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   Eigen::Vector3d pts_i_, pts_j_;
@@ -46,11 +44,9 @@ class ProjectionTwoFrame final : public ceres::SizedCostFunction<2, 7, 7, 1> {
 /// Left camera to right camera in the same frame. Block: inv_depth (1).
 class ProjectionOneFrameTwoCam final : public ceres::SizedCostFunction<2, 1> {
  public:
-  ProjectionOneFrameTwoCam(const Eigen::Vector2d& xy_left, const Eigen::Vector2d& xy_right,
-                           const Extrinsic& T_b_c0, const Extrinsic& T_b_c1,
-                           const ProjectionWeight& weight);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+  ProjectionOneFrameTwoCam(const Eigen::Vector2d& xy_left, const Eigen::Vector2d& xy_right, const Extrinsic& T_b_c0,
+                           const Extrinsic& T_b_c1, const ProjectionWeight& weight);
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   Eigen::Vector3d pts_i_, pts_j_;
@@ -74,8 +70,7 @@ class ProjectionTwoFrameTd final : public ceres::SizedCostFunction<2, 7, 7, 1, 1
  public:
   ProjectionTwoFrameTd(const TimedObservation& obs_i, const TimedObservation& obs_j, const Extrinsic& T_b_c0,
                        const Extrinsic& T_b_cb, const ProjectionWeight& weight);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   TimedObservation i_, j_;
@@ -88,8 +83,7 @@ class ProjectionOneFrameTwoCamTd final : public ceres::SizedCostFunction<2, 1, 1
  public:
   ProjectionOneFrameTwoCamTd(const TimedObservation& left, const TimedObservation& right, const Extrinsic& T_b_c0,
                              const Extrinsic& T_b_c1, const ProjectionWeight& weight);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   TimedObservation left_, right_;
@@ -104,8 +98,7 @@ class ProjectionOneFrameTwoCamTd final : public ceres::SizedCostFunction<2, 1, 1
 class AnchorRayObservation final : public ceres::SizedCostFunction<2, 3> {
  public:
   AnchorRayObservation(const Eigen::Vector2d& xy, const ProjectionWeight& weight);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   Eigen::Vector2d xy_;
@@ -118,8 +111,7 @@ class ProjectionTwoFrameRay final : public ceres::SizedCostFunction<2, 7, 7, 3> 
  public:
   ProjectionTwoFrameRay(const Eigen::Vector2d& xy_j, const Extrinsic& T_b_c0, const Extrinsic& T_b_cb,
                         const ProjectionWeight& weight);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   Eigen::Vector3d pts_j_;
@@ -132,8 +124,7 @@ class ProjectionOneFrameTwoCamRay final : public ceres::SizedCostFunction<2, 3> 
  public:
   ProjectionOneFrameTwoCamRay(const Eigen::Vector2d& xy_right, const Extrinsic& T_b_c0, const Extrinsic& T_b_c1,
                               const ProjectionWeight& weight);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   Eigen::Vector3d pts_j_;
@@ -144,9 +135,8 @@ class ProjectionOneFrameTwoCamRay final : public ceres::SizedCostFunction<2, 3> 
 /// Normalized-plane reprojection of the anchor observation (xy_i, inverse depth)
 /// from pose_i/camera a into pose_j/camera b; the pure math shared by the factors
 /// and by outlier checks. Returns the 3D point in camera b.
-Eigen::Vector3d transferPoint(const Eigen::Vector3d& pts_i, double inv_depth,
-                              const Eigen::Vector3d& p_i, const Eigen::Quaterniond& q_i,
-                              const Eigen::Vector3d& p_j, const Eigen::Quaterniond& q_j,
+Eigen::Vector3d transferPoint(const Eigen::Vector3d& pts_i, double inv_depth, const Eigen::Vector3d& p_i,
+                              const Eigen::Quaterniond& q_i, const Eigen::Vector3d& p_j, const Eigen::Quaterniond& q_j,
                               const Extrinsic& cam_a, const Extrinsic& cam_b);
 
 }  // namespace idyvins::backend

@@ -1,5 +1,6 @@
 #include "backend/window_state.h"
 
+#include "backend/imu_factor.h"
 #include "backend/parameter_blocks.h"
 
 namespace idyvins::backend {

@@ -11,20 +11,12 @@
 #include <vector>
 
 #include "backend/feature_manager.h"
+#include "backend/frame_result.h"
 #include "backend/marginalization.h"
 #include "core/measurements.h"
 #include "imu/preintegration.h"
 
 namespace idyvins::backend {
-
-constexpr int kWindowSize = 10;
-
-/// A map point: static, eliminated in the front end, or confirmed dynamic.
-struct MapPoint {
-  Eigen::Vector3d p_w;
-  FeatureLabel label = FeatureLabel::kStatic;
-  std::uint64_t id = 0;
-};
 
 /// One frame of the window: its pose (p_w_b, q_w_b xyzw) and speed-bias (v_w, ba, bg) blocks.
 struct WindowFrame {
@@ -44,8 +36,8 @@ struct WindowState {
   bool initialized = false;  ///< gravity-aligned, solved
   FeatureManager fm;
   std::shared_ptr<MarginalizationPrior> prior;  ///< null before the first keyframe left the window
-  double td_s = 0;                 ///< camera–IMU time offset (s), a solver block with estimate_td
-  std::vector<ImuSample> imu;      ///< samples from the oldest frame on (and the last good state's)
+  double td_s = 0;                              ///< camera–IMU time offset (s), a solver block with estimate_td
+  std::vector<ImuSample> imu;                   ///< samples from the oldest frame on (and the last good state's)
   /// The body poses of frames 0..count.
   std::vector<Eigen::Isometry3d> poses() const;
 };

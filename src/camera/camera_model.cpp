@@ -65,8 +65,7 @@ double KannalaBrandt::radius(double theta, double* d_r_d_theta) const {
   const auto& k = params_.dist;
   // r = θ (1 + k2 θ² + k3 θ⁴ + k4 θ⁶ + k5 θ⁸)
   const double poly = 1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3])));
-  if (d_r_d_theta)
-    *d_r_d_theta = 1.0 + t2 * (3.0 * k[0] + t2 * (5.0 * k[1] + t2 * (7.0 * k[2] + t2 * 9.0 * k[3])));
+  if (d_r_d_theta) *d_r_d_theta = 1.0 + t2 * (3.0 * k[0] + t2 * (5.0 * k[1] + t2 * (7.0 * k[2] + t2 * 9.0 * k[3])));
   return theta * poly;
 }
 

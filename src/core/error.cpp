@@ -11,7 +11,6 @@ std::string format(const std::string& file, int line, const std::string& message
 InputError::InputError(const std::string& file, int line, const std::string& message)
     : std::runtime_error(format(file, line, message)), file_(file), line_(line) {}
 
-InputError::InputError(const std::string& file, const std::string& message)
-    : InputError(file, 0, message) {}
+InputError::InputError(const std::string& file, const std::string& message) : InputError(file, 0, message) {}
 
 }  // namespace idyvins

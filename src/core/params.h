@@ -1,7 +1,7 @@
 #pragma once
 // Declared parameters. Each module's parameter struct lists its config keys once (name,
 // unit, rule) in a `declareParams` member; the config reader, printer and writer
-// (io/config.h) are visitors of that list, so a key cannot be read without being printed
+// (config/config.h) are visitors of that list, so a key cannot be read without being printed
 // and saved, and its default lives only in the struct's member initializer.
 
 #include <string>

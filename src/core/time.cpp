@@ -12,8 +12,7 @@ TimeNs fromSeconds(double t_s) { return static_cast<TimeNs>(std::llround(t_s * 1
 std::string formatSeconds(TimeNs t_ns) {
   const bool negative = t_ns < 0;
   // Work on the magnitude in unsigned arithmetic (INT64_MIN safe).
-  const auto mag = negative ? static_cast<std::uint64_t>(-(t_ns + 1)) + 1u
-                            : static_cast<std::uint64_t>(t_ns);
+  const auto mag = negative ? static_cast<std::uint64_t>(-(t_ns + 1)) + 1u : static_cast<std::uint64_t>(t_ns);
   char buf[48];
   std::snprintf(buf, sizeof(buf), "%s%llu.%09llu", negative ? "-" : "",
                 static_cast<unsigned long long>(mag / kNsPerSecond),

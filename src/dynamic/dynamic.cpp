@@ -32,8 +32,9 @@ frontend::MotionPrior cameraMotionPrior(const imu::RelativeMotion& body, const E
   return p;
 }
 
-frontend::MotionPrior motionPrior(const imu::NavState& s, TimeNs t_prev, TimeNs t_cur, const std::vector<ImuSample>& imu,
-                                  const ImuNoise& noise, const Eigen::Isometry3d& T_b_c) {
+frontend::MotionPrior motionPrior(const imu::NavState& s, TimeNs t_prev, TimeNs t_cur,
+                                  const std::vector<ImuSample>& imu, const ImuNoise& noise,
+                                  const Eigen::Isometry3d& T_b_c) {
   if (imu.empty() || imu.front().t_ns > t_prev || imu.back().t_ns < t_cur || t_cur <= t_prev) return {};
   const imu::Preintegration pre = imu::integrateBetween(imu, t_prev, t_cur, s.ba, s.bg, noise);
   return cameraMotionPrior(pre.relativeMotion(s), T_b_c);
@@ -75,8 +76,7 @@ StereoMotionError stereoMotionError(const Vector2d& x0_l, const Vector2d& x0_r, 
   const double lambda = -a.dot(b) / a.squaredNorm();
   // Inverse depth, clamped to [1/kMaxDepthM, 1/kMinDepthM]: a negative disparity from noise
   // is a far point.
-  const double rho =
-      std::clamp(lambda > 0 ? 1.0 / lambda : 1.0 / kMaxDepthM, 1.0 / kMaxDepthM, 1.0 / kMinDepthM);
+  const double rho = std::clamp(lambda > 0 ? 1.0 / lambda : 1.0 / kMaxDepthM, 1.0 / kMaxDepthM, 1.0 / kMinDepthM);
   bool ok = true;
   auto residual = [&](double r_inv, const Vector3d& t_pc) {
     Eigen::Matrix<double, 4, 1> r;
@@ -121,10 +121,14 @@ double stereoNoiseScale(std::vector<double> chi2, double quantile, double ref) {
 
 const char* toString(StopRule rule) {
   switch (rule) {
-    case StopRule::kThreshold: return "largest d_s <= lambda_dy";
-    case StopRule::kCvReached: return "CV <= sqrt(2)";
-    case StopRule::kCvNotLowered: return "removal would not lower CV";
-    case StopRule::kEmpty: return "too few features";
+    case StopRule::kThreshold:
+      return "largest d_s <= lambda_dy";
+    case StopRule::kCvReached:
+      return "CV <= sqrt(2)";
+    case StopRule::kCvNotLowered:
+      return "removal would not lower CV";
+    case StopRule::kEmpty:
+      return "too few features";
   }
   return "?";
 }
@@ -219,7 +223,7 @@ std::vector<bool> IdyFilter::eliminateAndMark(std::vector<frontend::FilterItem>&
                                               const std::vector<std::size_t>& tracked, const std::vector<double>& raw,
                                               const std::vector<double>& ds) {
   std::vector<bool> removed(tracked.size(), false);
-  if (o_.eliminate) {  // eq. 4-5
+  if (eliminate_) {  // eq. 4-5
     const Elimination e = eliminate(ds, o_.lambda_dy);
     stats_.cv_before = e.cv_before;
     stats_.cv_after = e.cv_after;
@@ -306,7 +310,7 @@ void IdyFilter::judgeStereoFailures(std::vector<frontend::FilterItem>& items, co
       continue;
     }
     ++stats_.stereo_eliminated;
-    if (o_.eliminate) {
+    if (eliminate_) {
       it.remove = true;
       it.feature->label = frontend::FeatureLabel::kEliminated;
       ++stats_.eliminated;
@@ -317,8 +321,8 @@ void IdyFilter::judgeStereoFailures(std::vector<frontend::FilterItem>& items, co
 }
 
 void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<frontend::FilterItem>& items,
-                           const std::vector<std::size_t>& tracked, const std::vector<bool>& removed,
-                           const Matrix3d& R, double fx) {
+                           const std::vector<std::size_t>& tracked, const std::vector<bool>& removed, const Matrix3d& R,
+                           double fx) {
   const double sigma_p2 = std::max(0.0, ctx.prior->cov_p.trace()) / 3.0;
   const double dt = std::max(0.0, toSeconds(ctx.t_cur_ns - ctx.t_prev_ns));
   std::unordered_map<std::uint64_t, StereoAnchor> anchors;  // of the features seen now
@@ -334,10 +338,10 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
     ++stats_.stereo_tested;
     // Beyond the first step the chained priors drift (velocity error × time).
     const double drift = o_.stereo.drift_mps * (anchor.steps - 1) * dt;
-    const StereoMotionError e = stereoMotionError(anchor.xy_l, anchor.xy_r, it.feature->xy, it.feature->xy_right,
-                                                  *o_.T_r_l, anchor.R, anchor.t, anchor.var_p + drift * drift, fx,
-                                                  o_.stereo.sigma_px,
-                                                  o_.stereo.shape ? it.feature->match_shape : Eigen::Matrix2d::Identity());
+    const StereoMotionError e =
+        stereoMotionError(anchor.xy_l, anchor.xy_r, it.feature->xy, it.feature->xy_right, *o_.T_r_l, anchor.R, anchor.t,
+                          anchor.var_p + drift * drift, fx, o_.stereo.sigma_px,
+                          o_.stereo.shape ? it.feature->match_shape : Eigen::Matrix2d::Identity());
     if (!e.valid) continue;
     it.feature->stereo_chi2 = e.chi2;
     it.feature->stereo_depth = e.depth;

@@ -13,9 +13,9 @@
 #include "camera/camera_model.h"
 #include "camera/camera_params.h"
 #include "core/measurements.h"
+#include "dynamic/idy_options.h"
 #include "frontend/feature_filter.h"
 #include "imu/preintegration.h"
-#include "dynamic/idy_options.h"
 
 namespace idyvins::dynamic {
 
@@ -50,11 +50,11 @@ double epipolarErrorPx2(const Eigen::Vector2d& x0, const Eigen::Vector2d& x1, co
 /// disparity's noise along the (horizontal) baseline; the prior's position, σ_P² = trace
 /// cov_p / 3; J_ρ, J_t by central differences). chi2 = rᵀ C⁻¹ r (χ², 4 dof, for a static point).
 struct StereoMotionError {
-  bool valid = false;   ///< false: not triangulable in front of both cameras
-  double chi2 = 0;      ///< rᵀ C⁻¹ r
-  double chi2_left = 0; ///< the same for the left image's 2 residuals alone (χ², 2 dof)
+  bool valid = false;       ///< false: not triangulable in front of both cameras
+  double chi2 = 0;          ///< rᵀ C⁻¹ r
+  double chi2_left = 0;     ///< the same for the left image's 2 residuals alone (χ², 2 dof)
   double residual_px2 = 0;  ///< ‖r‖²
-  double depth = 0;     ///< triangulated depth in frame k (m)
+  double depth = 0;         ///< triangulated depth in frame k (m)
 };
 
 /// x0_l, x0_r: left / right normalized coordinates in frame k; x1_l, x1_r: in frame k+1.
@@ -62,8 +62,8 @@ struct StereoMotionError {
 StereoMotionError stereoMotionError(const Eigen::Vector2d& x0_l, const Eigen::Vector2d& x0_r,
                                     const Eigen::Vector2d& x1_l, const Eigen::Vector2d& x1_r,
                                     const Eigen::Isometry3d& T_r_l, const Eigen::Matrix3d& R_prev_cur,
-                                    const Eigen::Vector3d& t_prev_cur, double sigma_p2, double focal,
-                                    double sigma_px, const Eigen::Matrix2d& shape = Eigen::Matrix2d::Identity());
+                                    const Eigen::Vector3d& t_prev_cur, double sigma_p2, double focal, double sigma_px,
+                                    const Eigen::Matrix2d& shape = Eigen::Matrix2d::Identity());
 
 /// Noise scale of the stereo motion test on one frame: max(1, q / ref) with q the
 /// `quantile` of the frame's χ² values (static points dominate the low quantiles, so q
@@ -98,8 +98,8 @@ struct FrameStats {
   std::size_t tracked = 0, eliminated = 0, candidates = 0;
   double cv_before = 0, cv_after = 0;
   std::string stop_rule;
-  std::vector<double> d_s;       ///< per tracked feature (px²), before elimination
-  std::vector<double> d_s_kept;  ///< the ones left after elimination
+  std::vector<double> d_s;            ///< per tracked feature (px²), before elimination
+  std::vector<double> d_s_kept;       ///< the ones left after elimination
   std::size_t stereo_tested = 0;      ///< features with a right match now and a stereo anchor (stereo test)
   std::size_t stereo_eliminated = 0;  ///< of those, removed (or marked, idy-ba) by the stereo test
   double stereo_noise_scale = 1;      ///< the χ² were divided by this (stereoNoiseScale)
@@ -117,9 +117,8 @@ struct StaticPrediction {
   double tol_px;
 };
 std::optional<StaticPrediction> predictStaticPoint(const frontend::LostCorner& corner,
-                                                   const frontend::MotionPrior& prior,
-                                                   const camera::CameraModel& left, const Eigen::Isometry3d& T_r_l,
-                                                   double sigma_px, double base_tol_px);
+                                                   const frontend::MotionPrior& prior, const camera::CameraModel& left,
+                                                   const Eigen::Isometry3d& T_r_l, double sigma_px, double base_tol_px);
 
 /// The `idy` front-end filter: d_s per tracked feature from the motion prior,
 /// elimination (remove), marking (label kCandidate). Frames without a valid prior
@@ -127,12 +126,12 @@ std::optional<StaticPrediction> predictStaticPoint(const frontend::LostCorner& c
 /// test on, features that fail it are removed (idy, idy-pre) or marked (idy-ba) too.
 class IdyFilter final : public frontend::FeatureFilter {
  public:
-  explicit IdyFilter(const IdyOptions& options) : o_(options) {}
+  /// With `eliminate` false (idy-ba) features over lambda_dy are only marked.
+  explicit IdyFilter(const IdyOptions& options, bool eliminate = true) : o_(options), eliminate_(eliminate) {}
   /// The paper's filter alone (no T_r_l: no stereo motion test).
-  IdyFilter(double lambda_dy, double lambda_dy_c, bool eliminate = true) {
+  IdyFilter(double lambda_dy, double lambda_dy_c, bool eliminate = true) : eliminate_(eliminate) {
     o_.lambda_dy = lambda_dy;
     o_.lambda_dy_c = lambda_dy_c;
-    o_.eliminate = eliminate;
   }
   void apply(const frontend::FilterContext& context, std::vector<frontend::FilterItem>& items) override;
   /// The lost-corner test: a corner is judged moving when the tracker does not find it near
@@ -145,14 +144,15 @@ class IdyFilter final : public frontend::FeatureFilter {
 
  private:
   IdyOptions o_;
+  bool eliminate_ = true;  ///< false: features over lambda_dy only marked (idy-ba)
   FrameStats stats_;
   struct StereoAnchor {
     Eigen::Vector2d xy_l, xy_r;  ///< stereo observation at the anchor frame (normalized)
     Eigen::Matrix3d R;           ///< P_anchor = R P_cur + t, chained priors
     Eigen::Vector3d t;
-    double var_p;                ///< summed prior position variance (m²)
-    int steps;                   ///< frames since the anchor
-    int strikes;                 ///< consecutive failures of the test up to now
+    double var_p;  ///< summed prior position variance (m²)
+    int steps;     ///< frames since the anchor
+    int strikes;   ///< consecutive failures of the test up to now
   };
   std::unordered_map<std::uint64_t, StereoAnchor> stereo_anchors_;  ///< id -> anchor
   double noise_scale_ = 1;  ///< the last frame's stereo noise scale (kept on frames with few tests)

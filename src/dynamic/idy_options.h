@@ -17,7 +17,8 @@ struct StereoMotionOptions {
   double chi2 = 18.47;     ///< χ²₄ at 99.9 %
   double sigma_px = 0.25;  ///< one KLT / stereo match
   int strikes = 2;         ///< consecutive failures before removal (an earlier failure marks a candidate)
-  int anchor_frames = 40;  ///< compare with the stereo observation up to this many frames back (1 = previous; 2 s at 20 Hz)
+  int anchor_frames =
+      40;  ///< compare with the stereo observation up to this many frames back (1 = previous; 2 s at 20 Hz)
   double drift_mps = 0.02;  ///< drift of the chained priors
   /// With a value above `chi2`, a repeated failure removes the feature only when its χ²
   /// exceeds this or the failures reach `persistent_strikes`; otherwise it stays a
@@ -56,23 +57,8 @@ struct IdyOptions {
   /// 3 spares a new corner's first KLT step, the noisiest on blurred images; measured on
   /// both families and left at 2 (docs/method.md).
   int ds_from_observation = 2;
-  /// Extension of §4.6 (not in the paper): in the modes with post-processing, a landmark
-  /// that fails the 3 px outlier test is confirmed dynamic like a failing candidate (its
-  /// track leaves the window for good, dynamic map) instead of being dropped and
-  /// re-triangulated from its next observation.
-  bool confirm_outliers = true;
-  /// Extension of §4.3 (not in the paper): in idy and idy-pre, a new corner lost in its
-  /// second frame is labelled dynamic when it is not found where the motion prior puts it
-  /// as a static stereo point (frontend::TrackerParams::judge_lost_new_tracks). Labels and
-  /// dynamic map only: such a corner never constrains the estimate.
-  bool lost_track_test = true;
-  /// Extension of §4.3 (not in the paper): in idy and idy-pre the tracker keeps following
-  /// the features the filter eliminated (never handed to the estimator again) so that no new
-  /// corner is seeded on the same moving object (frontend::TrackerParams::
-  /// keep_following_eliminated). Off: an eliminated track ends, as DESIGN §4.3 says.
-  bool follow_eliminated = true;
   StereoMotionOptions stereo;
-  // The lost-corner test (lost_track_test).
+  // The lost-corner test's judgement (frontend::TrackerParams::lost_track_test).
   double lost_stereo_sigma_px = 0.25;   ///< per-coordinate match noise behind the depth tolerance
   double lost_base_tolerance_px = 2.0;  ///< tolerance on top of the depth and prior terms
   /// Not judged when the stereo depth measured at the predicted pixel is below this ratio
@@ -82,8 +68,7 @@ struct IdyOptions {
   /// this (a corner on a silhouette still half matches over the background).
   double lost_max_zncc = 0.5;
 
-  // Set by the mode and the rig (pipeline/modes.h), not config keys.
-  bool eliminate = true;  ///< false in mode idy-ba: only mark
+  // Set by the rig (config/modes.h), not a config key.
   /// Left camera -> right camera; the stereo motion test runs only with it.
   std::optional<Eigen::Isometry3d> T_r_l;
 
@@ -91,14 +76,10 @@ struct IdyOptions {
   void declareParams(ParamVisitor& v) {
     v.section("IDY-VINS (DESIGN §4)");
     v.param({"lambda_dy", "px^2, elimination threshold (eq. 4)", ParamRule::kPositive}, lambda_dy);
-    v.param({"lambda_dy_c", "px^2, candidate threshold (eq. 6), <= lambda_dy", ParamRule::kNonNegative},
-            lambda_dy_c);
+    v.param({"lambda_dy_c", "px^2, candidate threshold (eq. 6), <= lambda_dy", ParamRule::kNonNegative}, lambda_dy_c);
     v.param({"ds_from_observation", "a track's observation from which d_s is scored, >= 2 (2 = the paper)",
              ParamRule::kPositive},
             ds_from_observation);
-    v.param({"confirm_outliers_dynamic", "0/1, outlier landmarks confirmed dynamic"}, confirm_outliers);
-    v.param({"lost_track_test", "0/1, lost new corners judged (idy, idy-pre)"}, lost_track_test);
-    v.param({"follow_eliminated", "0/1, eliminated features still followed (idy, idy-pre)"}, follow_eliminated);
     v.section("IDY-VINS stereo motion test (DESIGN §4.9)");
     StereoMotionOptions& m = stereo;
     v.param({"stereo_motion_test", "0/1"}, m.enabled);
@@ -113,14 +94,12 @@ struct IdyOptions {
     v.param({"stereo_motion_persistent_strikes", "failures that remove whatever the chi2, 0 = never",
              ParamRule::kNonNegative},
             m.persistent_strikes);
-    v.param({"stereo_motion_left_chi2", "chi2 (2 dof) of the left residual that spares, 0 = off",
-             ParamRule::kNonNegative},
-            m.left_chi2);
-    v.param({"stereo_motion_noise_ref", "chi2 quantile above which the test scales, 0 = off",
-             ParamRule::kNonNegative},
+    v.param(
+        {"stereo_motion_left_chi2", "chi2 (2 dof) of the left residual that spares, 0 = off", ParamRule::kNonNegative},
+        m.left_chi2);
+    v.param({"stereo_motion_noise_ref", "chi2 quantile above which the test scales, 0 = off", ParamRule::kNonNegative},
             m.noise_ref);
-    v.param({"stereo_motion_noise_quantile", "quantile of the measured noise", ParamRule::kOpenUnit},
-            m.noise_quantile);
+    v.param({"stereo_motion_noise_quantile", "quantile of the measured noise", ParamRule::kOpenUnit}, m.noise_quantile);
     v.param({"stereo_motion_min_disparity_px", "px, anchor disparity below which points are not judged",
              ParamRule::kNonNegative},
             m.min_disparity_px);
@@ -130,8 +109,7 @@ struct IdyOptions {
             lost_stereo_sigma_px);
     v.param({"lost_base_tolerance_px", "px, tolerance on top of depth and prior", ParamRule::kNonNegative},
             lost_base_tolerance_px);
-    v.param({"lost_occlusion_ratio", "measured / predicted depth below which a corner is hidden",
-             ParamRule::kFraction},
+    v.param({"lost_occlusion_ratio", "measured / predicted depth below which a corner is hidden", ParamRule::kFraction},
             lost_occlusion_ratio);
     v.param({"lost_max_zncc", "best first-patch ZNCC near the prediction for 'moved'", ParamRule::kCorrelation},
             lost_max_zncc);

@@ -10,7 +10,8 @@ namespace {
 
 double quantile(std::vector<float>& v, double q) {
   if (v.empty()) return 0;
-  const auto k = static_cast<std::size_t>(std::min<double>(static_cast<double>(v.size()) - 1, q * static_cast<double>(v.size())));
+  const auto k =
+      static_cast<std::size_t>(std::min<double>(static_cast<double>(v.size()) - 1, q * static_cast<double>(v.size())));
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
   return v[k];
 }
@@ -44,8 +45,8 @@ ImageFigures imageFigures(const cv::Mat& gray, double min_dist_px) {
   for (int y = 0; y < gray.rows; ++y) {
     const std::uint8_t* row = gray.ptr<std::uint8_t>(y);
     for (int x = 0; x < gray.cols; ++x) {
-      const int ring = std::min(kVignettingRings - 1,
-                                static_cast<int>(std::hypot(x - cx, y - cy) / half_diag * kVignettingRings));
+      const int ring =
+          std::min(kVignettingRings - 1, static_cast<int>(std::hypot(x - cx, y - cy) / half_diag * kVignettingRings));
       sum[ring] += row[x];
       ++n[ring];
     }

@@ -17,10 +17,10 @@ constexpr int kVignettingRings = 5;
 
 /// One image's figures.
 struct ImageFigures {
-  double mean = 0, stddev = 0;              ///< gray levels
-  double gradient_median = 0, gradient_p90 = 0;  ///< Sobel 3x3 magnitude / 8 (gray levels per px)
-  double flat_fraction = 0;                 ///< pixels with gradient magnitude < 2 gray levels per px
-  std::size_t corners = 0;                  ///< Shi-Tomasi corners (quality 0.01, min_dist apart)
+  double mean = 0, stddev = 0;                       ///< gray levels
+  double gradient_median = 0, gradient_p90 = 0;      ///< Sobel 3x3 magnitude / 8 (gray levels per px)
+  double flat_fraction = 0;                          ///< pixels with gradient magnitude < 2 gray levels per px
+  std::size_t corners = 0;                           ///< Shi-Tomasi corners (quality 0.01, min_dist apart)
   std::array<double, kVignettingRings> ring_mean{};  ///< mean brightness per radial ring
 };
 
@@ -29,10 +29,10 @@ ImageFigures imageFigures(const cv::Mat& gray, double min_dist_px);
 /// A sequence's figures: means over the frames, plus what only a sequence has.
 struct SequenceFigures {
   std::size_t frames = 0;
-  ImageFigures mean;                        ///< each field averaged over the left images
-  double frame_mean_variation = 0;          ///< std over frames of the left mean / its average
+  ImageFigures mean;                                  ///< each field averaged over the left images
+  double frame_mean_variation = 0;                    ///< std over frames of the left mean / its average
   std::array<double, kVignettingRings> vignetting{};  ///< ring means / centre ring's, averaged over frames
-  double right_left_ratio = 0;              ///< mean right brightness / mean left brightness
+  double right_left_ratio = 0;                        ///< mean right brightness / mean left brightness
 };
 
 class SequenceStatistics {

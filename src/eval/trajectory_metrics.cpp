@@ -9,27 +9,35 @@
 namespace idyvins::eval {
 
 bool parseAlignMode(const std::string& text, AlignMode& mode) {
-  if (text == "se3") mode = AlignMode::kSe3;
-  else if (text == "sim3") mode = AlignMode::kSim3;
-  else if (text == "posyaw") mode = AlignMode::kPosYaw;
-  else if (text == "none") mode = AlignMode::kNone;
-  else return false;
+  if (text == "se3")
+    mode = AlignMode::kSe3;
+  else if (text == "sim3")
+    mode = AlignMode::kSim3;
+  else if (text == "posyaw")
+    mode = AlignMode::kPosYaw;
+  else if (text == "none")
+    mode = AlignMode::kNone;
+  else
+    return false;
   return true;
 }
 
 const char* toString(AlignMode mode) {
   switch (mode) {
-    case AlignMode::kSe3: return "se3";
-    case AlignMode::kSim3: return "sim3";
-    case AlignMode::kPosYaw: return "posyaw";
-    case AlignMode::kNone: return "none";
+    case AlignMode::kSe3:
+      return "se3";
+    case AlignMode::kSim3:
+      return "sim3";
+    case AlignMode::kPosYaw:
+      return "posyaw";
+    case AlignMode::kNone:
+      return "none";
   }
   return "?";
 }
 
 std::vector<std::pair<std::size_t, std::size_t>> associate(const std::vector<StampedPose>& ref,
-                                                           const std::vector<StampedPose>& est,
-                                                           TimeNs max_dt_ns) {
+                                                           const std::vector<StampedPose>& est, TimeNs max_dt_ns) {
   const bool est_longer = est.size() > ref.size();
   const auto& shorter = est_longer ? ref : est;
   const auto& longer = est_longer ? est : ref;
@@ -115,10 +123,17 @@ AteResult computeAte(const std::vector<StampedPose>& ref, const std::vector<Stam
     P.col(k) = est[r.pairs[k].second].p_w_b;
   }
   switch (align) {
-    case AlignMode::kSe3: r.alignment = umeyama(P, Q, false); break;
-    case AlignMode::kSim3: r.alignment = umeyama(P, Q, true); break;
-    case AlignMode::kPosYaw: r.alignment = alignPositionYaw(P, Q); break;
-    case AlignMode::kNone: break;
+    case AlignMode::kSe3:
+      r.alignment = umeyama(P, Q, false);
+      break;
+    case AlignMode::kSim3:
+      r.alignment = umeyama(P, Q, true);
+      break;
+    case AlignMode::kPosYaw:
+      r.alignment = alignPositionYaw(P, Q);
+      break;
+    case AlignMode::kNone:
+      break;
   }
   for (Eigen::Index k = 0; k < n; ++k) {
     r.errors.push_back((r.alignment.apply(P.col(k)) - Q.col(k)).norm());

@@ -31,8 +31,7 @@ struct Similarity {
 /// trajectory with fewer poses (the estimate when both are equal), the nearest
 /// stamp of the other, kept when |Δt| ≤ max_dt_ns (evo's rule; ties: first index).
 std::vector<std::pair<std::size_t, std::size_t>> associate(const std::vector<StampedPose>& ref,
-                                                           const std::vector<StampedPose>& est,
-                                                           TimeNs max_dt_ns);
+                                                           const std::vector<StampedPose>& est, TimeNs max_dt_ns);
 
 /// Umeyama's least-squares similarity mapping `src` onto `dst` (columns are points);
 /// with_scale = false fixes s = 1. Throws std::invalid_argument when degenerate.
@@ -58,8 +57,8 @@ struct AteResult {
 };
 
 /// Absolute trajectory error (translation part) after alignment.
-AteResult computeAte(const std::vector<StampedPose>& ref, const std::vector<StampedPose>& est,
-                     AlignMode align, TimeNs max_dt_ns);
+AteResult computeAte(const std::vector<StampedPose>& ref, const std::vector<StampedPose>& est, AlignMode align,
+                     TimeNs max_dt_ns);
 
 /// RPE (translation part) for a path-length delta in metres, on associated poses
 /// (est already aligned or not: the relative error does not depend on a rigid alignment).

@@ -225,14 +225,10 @@ std::vector<cv::Point2f> detectCorners(const cv::Mat& image, const cv::Mat& mask
   const int width = image.cols, height = image.rows, tile = options.tile;
   if (options.max_corners <= 0 || width < 3 || height < 3) return {};
   const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
-  const TileGrid grid{width,
-                      height,
-                      tile,
-                      tiles_x,
-                      tiles_y,
-                      openTiles(mask, width, height, tile, tiles_x, tiles_y),
-                      mask,
-                      std::vector<uchar>(mask.empty() ? static_cast<std::size_t>(width) : 0, 255)};
+  const TileGrid grid{width,   height,
+                      tile,    tiles_x,
+                      tiles_y, openTiles(mask, width, height, tile, tiles_x, tiles_y),
+                      mask,    std::vector<uchar>(mask.empty() ? static_cast<std::size_t>(width) : 0, 255)};
   cv::Mat eig(image.size(), CV_32FC1);
   responsesOnOpenTiles(image, grid.open, tile, tiles_x, tiles_y, eig);
   // Threshold relative to the strongest response at an allowed pixel.

@@ -12,7 +12,8 @@ void RansacFilter::apply(const FilterContext& ctx, std::vector<FilterItem>& item
   for (std::size_t i = 0; i < items.size(); ++i) {
     if (!items[i].tracked) continue;
     // Undistorted pixels with the mean focal length (VINS-Fusion uses a fixed 460).
-    a.emplace_back(static_cast<float>(f * items[i].prev_xy.x() + p.cx), static_cast<float>(f * items[i].prev_xy.y() + p.cy));
+    a.emplace_back(static_cast<float>(f * items[i].prev_xy.x() + p.cx),
+                   static_cast<float>(f * items[i].prev_xy.y() + p.cy));
     const Eigen::Vector2d& xy = items[i].feature->xy;
     b.emplace_back(static_cast<float>(f * xy.x() + p.cx), static_cast<float>(f * xy.y() + p.cy));
     index.push_back(i);

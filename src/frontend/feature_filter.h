@@ -17,10 +17,10 @@ struct FilterItem {
   Feature* feature = nullptr;  ///< current observation (label and score may be set)
   bool tracked = false;        ///< has a previous observation
   Eigen::Vector2d prev_uv = Eigen::Vector2d::Zero(), prev_xy = Eigen::Vector2d::Zero();
-  bool prev_has_right = false;                           ///< previous observation had a right match
+  bool prev_has_right = false;                              ///< previous observation had a right match
   Eigen::Vector2d prev_xy_right = Eigen::Vector2d::Zero();  ///< its right normalized coordinates
   // The current observation's right match (feature->has_right, xy_right) is set before the filter.
-  bool remove = false;         ///< set by the filter: drop the feature (it stops being tracked)
+  bool remove = false;  ///< set by the filter: drop the feature (it stops being tracked)
 };
 
 /// Frame-level inputs a filter may use.
@@ -39,10 +39,10 @@ struct LostCorner {
 
 /// Where a filter asks the tracker to look for a lost corner in the current frame.
 struct LostCornerSearch {
-  std::size_t corner = 0;                          ///< index into the lost corners
+  std::size_t corner = 0;                             ///< index into the lost corners
   Eigen::Vector2d uv_pred = Eigen::Vector2d::Zero();  ///< left pixel to look at
   Eigen::Vector3d p_pred = Eigen::Vector3d::Zero();   ///< the point expected there, current left camera (m)
-  double tol_px = 0;                                ///< how far from uv_pred a find counts
+  double tol_px = 0;                                  ///< how far from uv_pred a find counts
 };
 
 /// What the tracker measured at a search.
@@ -67,8 +67,8 @@ class LostCornerProbe {
 
 /// The judgement of the lost corners of a frame.
 struct LostCornerJudgement {
-  std::size_t tested = 0;            ///< corners the static hypothesis could be tested on
-  std::vector<std::size_t> moving;   ///< indices of the corners judged moving, ascending
+  std::size_t tested = 0;           ///< corners the static hypothesis could be tested on
+  std::vector<std::size_t> moving;  ///< indices of the corners judged moving, ascending
 };
 
 /// Interface of a rejection mode.
@@ -76,7 +76,7 @@ class FeatureFilter {
  public:
   virtual ~FeatureFilter() = default;
   virtual void apply(const FilterContext& context, std::vector<FilterItem>& items) = 0;
-  /// Judges the new corners lost in this frame (TrackerParams::judge_lost_new_tracks);
+  /// Judges the new corners lost in this frame (TrackerParams::lost_track_test);
   /// by default none is judged.
   virtual LostCornerJudgement judgeLost(const FilterContext& /*context*/, const std::vector<LostCorner>& /*lost*/,
                                         LostCornerProbe& /*probe*/) {

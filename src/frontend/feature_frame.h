@@ -16,8 +16,8 @@ using idyvins::FeatureLabel;  // core/label.h
 /// One tracked feature in the current frame.
 struct Feature {
   std::uint64_t id = 0;
-  Eigen::Vector2d uv = Eigen::Vector2d::Zero();     ///< left pixel (distorted image)
-  Eigen::Vector2d xy = Eigen::Vector2d::Zero();     ///< left normalized, undistorted (x/z, y/z)
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();  ///< left pixel (distorted image)
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();  ///< left normalized, undistorted (x/z, y/z)
   bool has_right = false;
   /// A right match (uv_right, xy_right) that failed only the patch-correlation check
   /// (TrackerParams::stereo_zncc_motion_only): has_right is false, so the motion tests and
@@ -39,7 +39,7 @@ struct Feature {
   Eigen::Vector2d velocity_xy_right = Eigen::Vector2d::Zero();
   int track_length = 1;  ///< frames this id has been tracked (1 = new)
   FeatureLabel label = FeatureLabel::kStatic;
-  double d_s_px2 = 0;    ///< IDY: the minimum projection error d_s (px², DESIGN §4.2), 0 if not scored
+  double d_s_px2 = 0;       ///< IDY: the minimum projection error d_s (px², DESIGN §4.2), 0 if not scored
   double stereo_chi2 = -1;  ///< IDY stereo motion test's χ² (4 dof), -1 if not tested
   double stereo_depth = 0;  ///< depth (m) of the stereo test's anchor point, 0 if not tested
 };
@@ -68,20 +68,20 @@ struct FeatureFrame {
   double td_s = 0;  ///< camera–IMU time offset the stamp was shifted by (config td, or its estimate)
   std::vector<Feature> features;
   /// Features labelled kEliminated in this frame: removed by the filter now, or (with
-  /// TrackerParams::keep_following_eliminated) removed earlier and still followed.
+  /// TrackerParams::follow_eliminated) removed earlier and still followed.
   std::vector<Feature> removed;
   /// New corners lost in this frame (tracked for one frame only) that are not where the
-  /// motion prior puts a static point (TrackerParams::judge_lost_new_tracks): their
+  /// motion prior puts a static point (TrackerParams::lost_track_test): their
   /// previous-frame observation (uv, xy, right match), labelled kEliminated.
   std::vector<Feature> lost_moving;
   std::size_t lost_tested = 0;  ///< lost new corners the static hypothesis could be tested on
-  double tracking_ms = 0;  ///< KLT, detection, stereo, undistortion
-  double filter_ms = 0;    ///< the rejection filter (ransac / seg / idy preprocessing)
-  std::size_t tracked = 0;     ///< features carried over from the previous frame (before the filter)
-  std::size_t rejected = 0;    ///< removed by the filter in this frame
-  std::size_t detected = 0;    ///< new corners
-  TrackLosses lost_tracks;     ///< tracks of the previous frame (followed eliminated ones included) ended here
-  TrackLosses lost_new;        ///< of those, the previous frame's new corners (tracked for one frame)
+  double tracking_ms = 0;       ///< KLT, detection, stereo, undistortion
+  double filter_ms = 0;         ///< the rejection filter (ransac / seg / idy preprocessing)
+  std::size_t tracked = 0;      ///< features carried over from the previous frame (before the filter)
+  std::size_t rejected = 0;     ///< removed by the filter in this frame
+  std::size_t detected = 0;     ///< new corners
+  TrackLosses lost_tracks;      ///< tracks of the previous frame (followed eliminated ones included) ended here
+  TrackLosses lost_new;         ///< of those, the previous frame's new corners (tracked for one frame)
 };
 
 /// Relative motion of the left camera predicted between the previous and the

@@ -98,7 +98,8 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Ma
   std::vector<uchar> status, status_back;
   std::vector<float> err;
   const cv::Size win(params_.klt_window, params_.klt_window);
-  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations, params_.klt_epsilon);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations,
+                              params_.klt_epsilon);
   cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, p0, p1, status, err, win, params_.klt_max_level, crit);
   if (params_.flow_back) {
     back = p0;
@@ -232,12 +233,15 @@ void FeatureTracker::judgeLost(const cv::Mat& image, const std::vector<const Tra
 }
 
 std::vector<uchar> FeatureTracker::kltFromGuess(const std::vector<cv::Mat>& from, const std::vector<cv::Mat>& to,
-                                                const std::vector<cv::Point2f>& p0, std::vector<cv::Point2f>& p1) const {
+                                                const std::vector<cv::Point2f>& p0,
+                                                std::vector<cv::Point2f>& p1) const {
   std::vector<uchar> status;
   std::vector<float> err;
   const cv::Size win(params_.klt_window, params_.klt_window);
-  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations, params_.klt_epsilon);
-  cv::calcOpticalFlowPyrLK(from, to, p0, p1, status, err, win, params_.klt_max_level, crit, cv::OPTFLOW_USE_INITIAL_FLOW);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations,
+                              params_.klt_epsilon);
+  cv::calcOpticalFlowPyrLK(from, to, p0, p1, status, err, win, params_.klt_max_level, crit,
+                           cv::OPTFLOW_USE_INITIAL_FLOW);
   return status;
 }
 
@@ -246,14 +250,15 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
   // Keep long tracks first; drop tracks closer than min_dist to a longer one.
   std::vector<std::size_t> order(tracks.size());
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tracks[a].length > tracks[b].length; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return tracks[a].length > tracks[b].length; });
   detect_mask_.create(image.size(), CV_8UC1);
   detect_mask_.setTo(cv::Scalar(255));
   cv::Mat& mask = detect_mask_;
   const int r = static_cast<int>(params_.min_dist);
   std::vector<Track> kept;
-  const bool judge_pruned = params_.judge_lost_new_tracks && params_.keep_following_eliminated &&
-                            params_.move_with_eliminated_px > 0 && !followed_.empty();
+  const bool judge_pruned =
+      params_.lost_track_test && params_.follow_eliminated && params_.move_with_eliminated_px > 0 && !followed_.empty();
   for (std::size_t i : order) {
     const cv::Point pt(cvRound(tracks[i].uv.x), cvRound(tracks[i].uv.y));
     if (mask.at<uchar>(pt) != 255) {
@@ -318,7 +323,8 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
   std::vector<uchar> status(n, 0), status_back;
   std::vector<float> err;
   for (std::size_t i = 0; i < n; ++i)
-    pl[i] = cv::Point2f(static_cast<float>(features[(*which)[i]].uv.x()), static_cast<float>(features[(*which)[i]].uv.y()));
+    pl[i] =
+        cv::Point2f(static_cast<float>(features[(*which)[i]].uv.x()), static_cast<float>(features[(*which)[i]].uv.y()));
   cv::calcOpticalFlowPyrLK(left_pyr, right_pyr, pl, pr, status, err, win, params_.klt_max_level, crit, 0);
   for (std::size_t i = 0; i < n; ++i) status[i] = status[i] && inBorder(pr[i]);
   if (params_.flow_back) {
@@ -347,10 +353,9 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
     const Eigen::Vector3d line = E_c1_c0_ * x0;
     const double dist = std::abs(x1.dot(line)) / std::max(line.head<2>().norm(), 1e-12);
     if (dist * f > params_.stereo_epipolar_px) continue;
-    const bool correlates =
-        params_.stereo_min_zncc <= -1.0 ||
-        patchZncc(left_pyr[0], feat.uv, right_pyr[0], toEigen(pr[i]), params_.patch_half, params_.patch_min_inside) >=
-            params_.stereo_min_zncc;
+    const bool correlates = params_.stereo_min_zncc <= -1.0 ||
+                            patchZncc(left_pyr[0], feat.uv, right_pyr[0], toEigen(pr[i]), params_.patch_half,
+                                      params_.patch_min_inside) >= params_.stereo_min_zncc;
     if (!correlates && !params_.stereo_zncc_motion_only) continue;
     feat.has_right = correlates;
     feat.right_low_zncc = !correlates;
@@ -364,7 +369,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& input, const MotionPrior& 
                                    const cv::Mat* mask) {
   const auto start = Clock::now();
   StereoFrame frame = input;  // images are reference-counted: no copy unless equalized
-  if (clahe_) {  // into new images: frame's share the caller's pixels
+  if (clahe_) {               // into new images: frame's share the caller's pixels
     cv::Mat left, right;
     clahe_->apply(input.left, left);
     if (!input.right.empty()) clahe_->apply(input.right, right);
@@ -378,7 +383,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& input, const MotionPrior& 
   std::vector<PrevObs> prev;
   std::vector<const Track*> lost;  // into prev_tracks_
   trackPrevious(cur_pyr_, frame.left, tracks, prev, lost, w.out);
-  if (params_.judge_lost_new_tracks && !lost.empty()) {
+  if (params_.lost_track_test && !lost.empty()) {
     const auto t0 = Clock::now();
     judgeLost(frame.left, lost, w);
     w.filter_ms = msSince(t0);  // judging lost new corners counts as dynamic preprocessing
@@ -393,7 +398,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& input, const MotionPrior& 
   std::unordered_map<std::uint64_t, Feature> carried;  // id -> feature as the filter labelled it
   for (const auto& f : tracked_feats) carried.emplace(f.id, f);
   w.out.rejected = w.out.removed.size();
-  if (params_.keep_following_eliminated) followEliminated(w, followed, tracks);
+  if (params_.follow_eliminated) followEliminated(w, followed, tracks);
 
   std::vector<const Track*> with_eliminated;  // into prev_tracks_
   detectNew(frame.left, tracks, w.out, with_eliminated);
@@ -422,8 +427,7 @@ void FeatureTracker::buildPyramids(const StereoFrame& frame) {
   // filter (a filter may compare stereo observations of consecutive frames).
   has_right_image_ = !frame.right.empty() && cams_.size() >= 2;
   if (has_right_image_) {
-    const cv::Mat right =
-        params_.stereo_gain_compensation ? matchBrightness(frame.right, frame.left) : frame.right;
+    const cv::Mat right = params_.stereo_gain_compensation ? matchBrightness(frame.right, frame.left) : frame.right;
     cv::buildOpticalFlowPyramid(right, right_pyr_, window, params_.klt_max_level);
   }
 }
@@ -561,10 +565,13 @@ cv::Mat drawTracks(const cv::Mat& left, const FeatureFrame& frame) {
   cv::cvtColor(left, out, cv::COLOR_GRAY2BGR);
   auto color = [](FeatureLabel l) {
     switch (l) {
-      case FeatureLabel::kStatic: return cv::Scalar(0, 220, 0);
-      case FeatureLabel::kCandidate: return cv::Scalar(0, 220, 255);
+      case FeatureLabel::kStatic:
+        return cv::Scalar(0, 220, 0);
+      case FeatureLabel::kCandidate:
+        return cv::Scalar(0, 220, 255);
       case FeatureLabel::kEliminated:
-      case FeatureLabel::kConfirmedDynamic: return cv::Scalar(0, 0, 255);
+      case FeatureLabel::kConfirmedDynamic:
+        return cv::Scalar(0, 0, 255);
     }
     return cv::Scalar(255, 255, 255);
   };

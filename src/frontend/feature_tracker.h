@@ -46,7 +46,7 @@ class FeatureTracker {
     cv::Point2f uv;
     Eigen::Vector2d xy;
     int length;
-    std::shared_ptr<const PatchTemplate> patch;  ///< first appearance (null: not aligned)
+    std::shared_ptr<const PatchTemplate> patch;             ///< first appearance (null: not aligned)
     Eigen::Matrix2d A_patch = Eigen::Matrix2d::Identity();  ///< current affine shape of the patch
     bool has_right = false;                                 ///< right match in this track's frame
     bool right_low_zncc = false;                            ///< Feature::right_low_zncc
@@ -78,7 +78,7 @@ class FeatureTracker {
   /// `prev_obs` (tracked features) they are matched in the right image first.
   void filterTracks(FrameWork& w, std::vector<Track>& list, const std::vector<PrevObs>* prev_obs,
                     std::vector<Feature>& feats);
-  /// keep_following_eliminated: reports the followed tracks and follows this frame's removals.
+  /// follow_eliminated: reports the followed tracks and follows this frame's removals.
   void followEliminated(FrameWork& w, std::vector<Track>& followed, std::vector<Track>& tracks);
   /// Filters the new corners, fills w.out.features, returns the tracks kept for the next frame.
   std::vector<Track> assembleFeatures(FrameWork& w, const std::vector<Track>& tracks,
@@ -94,7 +94,7 @@ class FeatureTracker {
   /// Null when the track goes on (p1, A_patch and xy set), else why it ends.
   std::size_t TrackLosses::*continueTrack(const Track& old, const cv::Mat& image, cv::Point2f& p1,
                                           Eigen::Matrix2d& A_patch, Eigen::Vector2d& xy) const;
-  /// judge_lost_new_tracks: hands the lost one-frame tracks with a right match to the
+  /// lost_track_test: hands the lost one-frame tracks with a right match to the
   /// filter's judgement (with the tracker's measurements, Probe) and reports those judged
   /// moving in w.out.lost_moving.
   void judgeLost(const cv::Mat& image, const std::vector<const Track*>& lost, FrameWork& w) const;
@@ -125,10 +125,10 @@ class FeatureTracker {
   Eigen::Matrix3d E_c1_c0_;  ///< essential matrix: x1ᵀ E x0 = 0
   Eigen::Isometry3d T_c1_c0_ = Eigen::Isometry3d::Identity();
   std::vector<cv::Mat> prev_pyr_, cur_pyr_, right_pyr_;  ///< reused across frames (no per-frame allocation)
-  bool has_right_image_ = false;  ///< right_pyr_ holds the current frame's right image
+  bool has_right_image_ = false;                         ///< right_pyr_ holds the current frame's right image
   cv::Mat detect_mask_;
   std::vector<Track> prev_tracks_;
-  std::unordered_set<std::uint64_t> followed_;  ///< eliminated tracks still followed (keep_following_eliminated)
+  std::unordered_set<std::uint64_t> followed_;  ///< eliminated tracks still followed (follow_eliminated)
   TimeNs prev_t_ns_ = 0;
   std::uint64_t next_id_ = 0;
 };

@@ -74,8 +74,8 @@ double patchZnccAtBorder(const cv::Mat& a, const Eigen::Vector2d& uv_a, const cv
 
 }  // namespace
 
-double patchZncc(const cv::Mat& a, const Eigen::Vector2d& uv_a, const cv::Mat& b, const Eigen::Vector2d& uv_b,
-                 int half, double min_inside) {
+double patchZncc(const cv::Mat& a, const Eigen::Vector2d& uv_a, const cv::Mat& b, const Eigen::Vector2d& uv_b, int half,
+                 double min_inside) {
   const auto inside = [half](const cv::Mat& m, const Eigen::Vector2d& uv) {
     return uv.x() - half >= 0.0 && uv.y() - half >= 0.0 && uv.x() + half < m.cols - 1 && uv.y() + half < m.rows - 1;
   };
@@ -233,10 +233,10 @@ bool warpPatch(const cv::Mat& image, const AffineWarp& warp, int half, std::vect
   return true;
 }
 
-
 /// One Gauss-Newton step of a whole template whose warped patch lies in the image (the
 /// precomputed inverse Hessian): false when the warped patch is flat.
-bool stepWhole(const PatchTemplate& tmpl, std::vector<float>& warped, Eigen::Matrix<double, 6, 1>& dp, double& zncc_out) {
+bool stepWhole(const PatchTemplate& tmpl, std::vector<float>& warped, Eigen::Matrix<double, 6, 1>& dp,
+               double& zncc_out) {
   const std::size_t count = tmpl.values.size();
   // Normalize (zero mean, unit norm), then the error against the template and the
   // steepest-descent sums, in one pass over the normalized values.
@@ -338,8 +338,7 @@ AlignResult alignAffine(const PatchTemplate& tmpl, const cv::Mat& image, AffineW
     double zncc = -1.0;
     const bool whole = tmpl.inside.empty() && warpPatch(image, warp, tmpl.half, warped);
     if (!whole && min_inside >= 1.0) return res;  // leaves the image
-    if (!(whole ? stepWhole(tmpl, warped, dp, zncc) : stepMasked(tmpl, image, warp, min_inside, dp, zncc)))
-      return res;
+    if (!(whole ? stepWhole(tmpl, warped, dp, zncc) : stepMasked(tmpl, image, warp, min_inside, dp, zncc))) return res;
     res.zncc = zncc;
     Eigen::Matrix2d D;
     D << 1.0 + dp[0], dp[1], dp[2], 1.0 + dp[3];

@@ -27,19 +27,19 @@ struct AffineWarp {
 /// Hessian are then those of the pixels inside (the others are 0).
 struct PatchTemplate {
   int half = 0;
-  std::vector<float> values;     ///< normalized intensities, row-major
-  std::vector<float> sd;         ///< 6 steepest-descent values per pixel
+  std::vector<float> values;  ///< normalized intensities, row-major
+  std::vector<float> sd;      ///< 6 steepest-descent values per pixel
   Eigen::Matrix<double, 6, 6> H_inv;
   std::vector<unsigned char> inside;  ///< per pixel, 1 = in the image; empty: the whole square
-  double min_inside = 1.0;  ///< the share asked when it was cut (alignAffine asks no more of it)
-  bool valid = false;            ///< false: too little of it in the image, or without texture
+  double min_inside = 1.0;            ///< the share asked when it was cut (alignAffine asks no more of it)
+  bool valid = false;                 ///< false: too little of it in the image, or without texture
 };
 
 /// Options of alignAffine.
 struct AlignOptions {
   int max_iterations = 10;
-  double epsilon_px = 0.01;          ///< stops when the centre moves less than this
-  double max_scale_change = 3.0;     ///< singular values of A outside [1/this, this]: diverged
+  double epsilon_px = 0.01;       ///< stops when the centre moves less than this
+  double max_scale_change = 3.0;  ///< singular values of A outside [1/this, this]: diverged
   /// Share of the template's square that must lie in the image (and in the template) at
   /// every iteration; 1: the whole warped patch in the image, else failure. Below 1, an
   /// iteration whose warped patch is cut by the border uses the pixels inside both, its
@@ -50,7 +50,7 @@ struct AlignOptions {
 /// Result of alignAffine: whether it converged and how well the patch matches.
 struct AlignResult {
   bool converged = false;
-  double zncc = -1.0;   ///< zero-mean normalized cross-correlation at the solution, in [-1, 1]
+  double zncc = -1.0;  ///< zero-mean normalized cross-correlation at the solution, in [-1, 1]
   int iterations = 0;
 };
 
@@ -76,8 +76,8 @@ AlignResult alignAffine(const PatchTemplate& tmpl, const cv::Mat& image, AffineW
 /// which both points lie in their images, when they are at least that share of the square.
 /// Gain and bias invariant, no warp: for two views of the same surface seen alike
 /// (a stereo match).
-double patchZncc(const cv::Mat& a, const Eigen::Vector2d& uv_a, const cv::Mat& b, const Eigen::Vector2d& uv_b,
-                 int half, double min_inside = 1.0);
+double patchZncc(const cv::Mat& a, const Eigen::Vector2d& uv_a, const cv::Mat& b, const Eigen::Vector2d& uv_b, int half,
+                 double min_inside = 1.0);
 
 /// Shape of a point match's noise at `uv` (px) in a CV_8UC1 image: λ_max H⁻¹ with H the
 /// structure tensor (summed outer products of the central-difference gradients) over the

@@ -12,8 +12,8 @@ namespace {
 /// The q-quantile (0..1) of `v` by nearest rank; 0 for an empty vector.
 double quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
-  const auto k = static_cast<std::size_t>(std::min<double>(static_cast<double>(v.size()) - 1,
-                                                           std::ceil(q * static_cast<double>(v.size())) - 1));
+  const auto k = static_cast<std::size_t>(
+      std::min<double>(static_cast<double>(v.size()) - 1, std::ceil(q * static_cast<double>(v.size())) - 1));
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
   return v[k];
 }

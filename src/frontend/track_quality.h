@@ -9,15 +9,15 @@
 #include <unordered_map>
 #include <vector>
 
-#include "frontend/feature_frame.h"
 #include "camera/rig.h"
+#include "frontend/feature_frame.h"
 
 namespace idyvins::frontend {
 
 struct TrackQualitySummary {
   std::size_t frames = 0, features = 0, with_right = 0;
-  double right_fraction = 0;       ///< features with a right match / features
-  double epipolar_median_px = 0;   ///< distance of right matches to their epipolar line (cam1 pixels)
+  double right_fraction = 0;      ///< features with a right match / features
+  double epipolar_median_px = 0;  ///< distance of right matches to their epipolar line (cam1 pixels)
   double epipolar_p99_px = 0;
   std::size_t tracks = 0;          ///< distinct feature ids
   double track_length_median = 0;  ///< frames per track (its longest observed length), median over tracks

@@ -48,10 +48,10 @@ struct TrackerParams {
   /// maxLevel of the backward checks: they start at the forward start point, so a narrow
   /// basin suffices (VINS-Fusion uses 1 for its reverse check).
   int klt_back_max_level = 1;
-  int klt_iterations = 30;     ///< KLT stops after this many iterations ...
-  double klt_epsilon = 0.01;   ///< ... or when the update is below this (px)
-  double flow_back_px = 0.5;   ///< max forward-backward distance
-  int border_px = 1;           ///< a track nearer the image border than this is dropped
+  int klt_iterations = 30;    ///< KLT stops after this many iterations ...
+  double klt_epsilon = 0.01;  ///< ... or when the update is below this (px)
+  double flow_back_px = 0.5;  ///< max forward-backward distance
+  int border_px = 1;          ///< a track nearer the image border than this is dropped
 
   // First-patch alignment.
   /// After KLT, align each track's first-appearance patch (affine, gain/bias invariant) to
@@ -64,7 +64,7 @@ struct TrackerParams {
   double max_patch_correction_px = 2.0;  ///< KLT and alignment disagree by more: dropped
   /// With align_first_patch, no corner is detected within this many px of the image border.
   /// The default, patch_half + 2, keeps every first patch whole: a corner nearer the border
-  /// has no whole first patch and followed KLT alone, drifting 0.3-0.5 px per frame (and
+  /// has no whole first patch and followed KLT alone, drifting a fraction of a pixel per frame (and
   /// the detector's gradients reflect at the border, so an edge meeting it looks like a
   /// corner). Measurements: docs/method.md ("Corners at the border").
   int corner_margin_px = 9;
@@ -78,7 +78,7 @@ struct TrackerParams {
   double patch_min_inside = 1.0;
 
   // The lost-corner test's measurements (its judgement: dynamic::IdyOptions).
-  /// With judge_lost_new_tracks and keep_following_eliminated: a corner in its second frame
+  /// With lost_track_test and follow_eliminated: a corner in its second frame
   /// that the min_dist pruning drops next to a followed eliminated track, and whose
   /// displacement since its first frame agrees with that track's within this many px, is
   /// judged moving with it (reported in FeatureFrame::lost_moving, like a lost corner judged
@@ -95,17 +95,19 @@ struct TrackerParams {
   int track_dropout_permille = 0;
   int track_dropout_seed = 0;  ///< which tracks track_dropout_permille withholds
 
-  // Set by the mode (pipeline/modes.h), not config keys.
+  // Extensions of DESIGN §4.3 (not in the paper), run only in the modes whose table row says
+  // follow_eliminated (idy, idy-pre; config/modes.h switches them off in the others).
   /// Keep following features the filter eliminated: they are reported in
   /// FeatureFrame::removed every frame and never output as features again, but they keep
   /// their place in the image so that no new corner is seeded on the same moving object.
-  bool keep_following_eliminated = false;
+  /// Off: an eliminated track ends, as DESIGN §4.3 says.
+  bool follow_eliminated = true;
   /// Hand the new corners lost in their second frame to the filter's judgement
   /// (FeatureFilter::judgeLost; dynamic::IdyFilter moves a corner with a right match as a
   /// static point by the motion prior and asks the tracker to look for it there); those
-  /// judged moving are reported in FeatureFrame::lost_moving. Such a corner never reaches
-  /// the estimator's optimization (one observation), so this labels, it does not filter.
-  bool judge_lost_new_tracks = false;
+  /// judged moving are reported in FeatureFrame::lost_moving (labelled dynamic). Such a corner
+  /// never reaches the estimator's optimization (one observation): this labels, it does not filter.
+  bool lost_track_test = true;
 
   /// Declares every config key of the struct (load, print and save visit this list).
   void declareParams(ParamVisitor& v) {
@@ -147,7 +149,9 @@ struct TrackerParams {
              ParamRule::kNonNegative},
             track_dropout_permille);
     v.param({"track_dropout_seed", "which tracks are withheld", ParamRule::kNonNegative}, track_dropout_seed);
-    v.section("Feature tracker: corners moving with eliminated tracks (IDY modes)");
+    v.section("Feature tracker: eliminated tracks and lost new corners (idy, idy-pre)");
+    v.param({"follow_eliminated", "0/1, eliminated features still followed (idy, idy-pre)"}, follow_eliminated);
+    v.param({"lost_track_test", "0/1, lost new corners judged (idy, idy-pre)"}, lost_track_test);
     v.param({"move_with_eliminated_px", "px, displacement agreement with an eliminated track, 0 = off",
              ParamRule::kNonNegative},
             move_with_eliminated_px);

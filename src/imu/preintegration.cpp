@@ -11,8 +11,8 @@ using Eigen::Matrix3d;
 using Eigen::Quaterniond;
 using Eigen::Vector3d;
 
-Preintegration::Preintegration(const Vector3d& acc0, const Vector3d& gyr0, const Vector3d& ba,
-                               const Vector3d& bg, const ImuNoise& noise)
+Preintegration::Preintegration(const Vector3d& acc0, const Vector3d& gyr0, const Vector3d& ba, const Vector3d& bg,
+                               const ImuNoise& noise)
     : acc0_first_(acc0), gyr0_first_(gyr0), ba_(ba), bg_(bg), g_w_(0, 0, noise.g_norm) {
   const double q[6] = {noise.acc_n, noise.gyr_n, noise.acc_n, noise.gyr_n, noise.acc_w, noise.gyr_w};
   for (int k = 0; k < 6; ++k) noise_diag_.segment<3>(3 * k).setConstant(q[k] * q[k]);
@@ -102,13 +102,11 @@ void Preintegration::step(double dt, const Vector3d& acc1, const Vector3d& gyr1)
 }
 
 Vector3d Preintegration::correctedDeltaP(const Vector3d& ba, const Vector3d& bg) const {
-  return delta_p_ + jacobian_.block<3, 3>(kP, kBa) * (ba - ba_) +
-         jacobian_.block<3, 3>(kP, kBg) * (bg - bg_);
+  return delta_p_ + jacobian_.block<3, 3>(kP, kBa) * (ba - ba_) + jacobian_.block<3, 3>(kP, kBg) * (bg - bg_);
 }
 
 Vector3d Preintegration::correctedDeltaV(const Vector3d& ba, const Vector3d& bg) const {
-  return delta_v_ + jacobian_.block<3, 3>(kV, kBa) * (ba - ba_) +
-         jacobian_.block<3, 3>(kV, kBg) * (bg - bg_);
+  return delta_v_ + jacobian_.block<3, 3>(kV, kBa) * (ba - ba_) + jacobian_.block<3, 3>(kV, kBg) * (bg - bg_);
 }
 
 Quaterniond Preintegration::correctedDeltaQ(const Vector3d& bg) const {
@@ -119,8 +117,7 @@ Vector15 Preintegration::residual(const NavState& si, const NavState& sj) const 
   const double T = sum_dt_;
   const Quaterniond qi_inv = si.q_w_b.conjugate();
   Vector15 r;
-  r.segment<3>(kP) = qi_inv * (0.5 * g_w_ * T * T + sj.p_w_b - si.p_w_b - si.v_w * T) -
-                     correctedDeltaP(si.ba, si.bg);
+  r.segment<3>(kP) = qi_inv * (0.5 * g_w_ * T * T + sj.p_w_b - si.p_w_b - si.v_w * T) - correctedDeltaP(si.ba, si.bg);
   r.segment<3>(kR) = 2.0 * (correctedDeltaQ(si.bg).conjugate() * (qi_inv * sj.q_w_b)).vec();
   r.segment<3>(kV) = qi_inv * (g_w_ * T + sj.v_w - si.v_w) - correctedDeltaV(si.ba, si.bg);
   r.segment<3>(kBa) = sj.ba - si.ba;
@@ -146,14 +143,14 @@ RelativeMotion Preintegration::relativeMotion(const NavState& si) const {
   return m;
 }
 
-Preintegration integrateBetween(const std::vector<ImuSample>& samples, TimeNs t_i, TimeNs t_j,
-                                const Vector3d& ba, const Vector3d& bg, const ImuNoise& noise) {
+Preintegration integrateBetween(const std::vector<ImuSample>& samples, TimeNs t_i, TimeNs t_j, const Vector3d& ba,
+                                const Vector3d& bg, const ImuNoise& noise) {
   if (samples.empty() || samples.front().t_ns > t_i || samples.back().t_ns < t_j || t_j < t_i)
     throw std::invalid_argument("integrateBetween: IMU samples do not cover the interval");
   // Linear interpolation of a sample at time t.
   const auto at = [&](TimeNs t) {
-    const auto it = std::lower_bound(samples.begin(), samples.end(), t,
-                                     [](const ImuSample& s, TimeNs v) { return s.t_ns < v; });
+    const auto it =
+        std::lower_bound(samples.begin(), samples.end(), t, [](const ImuSample& s, TimeNs v) { return s.t_ns < v; });
     if (it->t_ns == t || it == samples.begin()) return *it;
     const ImuSample& a = *(it - 1);
     const ImuSample& b = *it;
@@ -168,7 +165,7 @@ Preintegration integrateBetween(const std::vector<ImuSample>& samples, TimeNs t_
   Preintegration pre(first.acc_b, first.gyr_b, ba, bg, noise);
   TimeNs t_prev = t_i;
   for (auto it = std::upper_bound(samples.begin(), samples.end(), t_i,
-                                  [](TimeNs v, const ImuSample& s) { return v < s.t_ns; });
+                                  [](TimeNs v, const ImuSample&s) { return v < s.t_ns; });
        it != samples.end() && it->t_ns < t_j; ++it) {
     pre.push(toSeconds(it->t_ns - t_prev), it->acc_b, it->gyr_b);
     t_prev = it->t_ns;

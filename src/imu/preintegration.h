@@ -75,7 +75,6 @@ class Preintegration {
   const Eigen::Quaterniond& deltaQ() const { return delta_q_; }
   const Matrix15& jacobian() const { return jacobian_; }
   const Matrix15& covariance() const { return covariance_; }
-  const Eigen::Vector3d& linearizedBa() const { return ba_; }
   const Eigen::Vector3d& linearizedBg() const { return bg_; }
   const Eigen::Vector3d& gravity() const { return g_w_; }
 
@@ -103,7 +102,6 @@ class Preintegration {
 /// interpolating the end samples); samples must cover [t_i, t_j].
 /// Returns the preintegration; used for prediction and for the motion prior.
 Preintegration integrateBetween(const std::vector<ImuSample>& samples, TimeNs t_i, TimeNs t_j,
-                                const Eigen::Vector3d& ba, const Eigen::Vector3d& bg,
-                                const ImuNoise& noise);
+                                const Eigen::Vector3d& ba, const Eigen::Vector3d& bg, const ImuNoise& noise);
 
 }  // namespace idyvins::imu

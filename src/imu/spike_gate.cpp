@@ -44,7 +44,7 @@ void SpikeGate::push(const ImuSample& s, std::vector<ImuSample>& released) {
   }
   const TimeNs max_ns = static_cast<TimeNs>(options_.max_ms * 1e6);
   if (!held_.empty() && s.t_ns - held_.front().t_ns > max_ns) {  // the run outlasted a spike: a real change
-    for (const ImuSample& h : held_) release(h, released);      // what follows is compared with the new level
+    for (const ImuSample& h : held_) release(h, released);       // what follows is compared with the new level
     held_.clear();
   }
   // After a gap longer than a spike the recent samples say nothing about this one.

@@ -29,10 +29,12 @@ struct SpikeGateOptions {
   double max_ms = 50.0;
 
   void visit(ParamVisitor& v) {
-    v.param({"imu_spike_acc", "m/s^2, acceleration this far from the recent median starts a possible spike (0 = not tested)",
+    v.param({"imu_spike_acc",
+             "m/s^2, acceleration this far from the recent median starts a possible spike (0 = not tested)",
              ParamRule::kNonNegative},
             acc_mps2);
-    v.param({"imu_spike_gyr", "rad/s, angular rate this far from the recent median starts a possible spike (0 = not tested)",
+    v.param({"imu_spike_gyr",
+             "rad/s, angular rate this far from the recent median starts a possible spike (0 = not tested)",
              ParamRule::kNonNegative},
             gyr_radps);
     v.param({"imu_spike_max_ms", "ms, a run of such samples returning within this is dropped as a spike (0 = gate off)",
@@ -56,7 +58,7 @@ class SpikeGate {
   void flush(std::vector<ImuSample>& released);
 
   bool holding() const { return !held_.empty(); }
-  std::size_t spikes() const { return spikes_; }                  ///< runs dropped
+  std::size_t spikes() const { return spikes_; }                   ///< runs dropped
   std::size_t droppedSamples() const { return dropped_samples_; }  ///< samples in them
 
  private:

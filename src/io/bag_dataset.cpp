@@ -77,9 +77,9 @@ std::string checkTopic(const std::string& path, const std::map<std::string, std:
                        const std::string& topic, const std::string& key, std::initializer_list<const char*> allowed) {
   const auto it = types.find(topic);
   if (it == types.end())
-    throw InputError(path, "topic '" + topic + "' (config key " + key + ") is not in the bag; its image topics: " +
-                               listTopics(types, {kImage, kCompressed}) + "; its IMU topics: " +
-                               listTopics(types, {kImu}));
+    throw InputError(path, "topic '" + topic + "' (config key " + key +
+                               ") is not in the bag; its image topics: " + listTopics(types, {kImage, kCompressed}) +
+                               "; its IMU topics: " + listTopics(types, {kImu}));
   for (const char* a : allowed)
     if (it->second == a) return it->second;
   std::string names;
@@ -129,17 +129,21 @@ cv::Mat toGray(const sensor_msgs::Image& m, const std::string& path, const std::
   if (ch == 0)
     throw InputError(path, where(topic, ordinal) + ": unsupported image encoding '" + m.encoding +
                                "' (supported: mono8, rgb8, bgr8, rgba8, bgra8)");
-  if (m.step < m.width * static_cast<std::uint32_t>(ch) ||
-      m.data.size() < static_cast<std::size_t>(m.step) * m.height)
+  if (m.step < m.width * static_cast<std::uint32_t>(ch) || m.data.size() < static_cast<std::size_t>(m.step) * m.height)
     throw InputError(path, where(topic, ordinal) + ": image data is shorter than height x step");
   const cv::Mat wrapped(static_cast<int>(m.height), static_cast<int>(m.width), CV_8UC(ch),
                         const_cast<std::uint8_t*>(m.data.data()), m.step);
   cv::Mat gray;
-  if (ch == 1) gray = wrapped.clone();
-  else if (m.encoding == "rgb8") cv::cvtColor(wrapped, gray, cv::COLOR_RGB2GRAY);
-  else if (m.encoding == "bgr8") cv::cvtColor(wrapped, gray, cv::COLOR_BGR2GRAY);
-  else if (m.encoding == "rgba8") cv::cvtColor(wrapped, gray, cv::COLOR_RGBA2GRAY);
-  else cv::cvtColor(wrapped, gray, cv::COLOR_BGRA2GRAY);
+  if (ch == 1)
+    gray = wrapped.clone();
+  else if (m.encoding == "rgb8")
+    cv::cvtColor(wrapped, gray, cv::COLOR_RGB2GRAY);
+  else if (m.encoding == "bgr8")
+    cv::cvtColor(wrapped, gray, cv::COLOR_BGR2GRAY);
+  else if (m.encoding == "rgba8")
+    cv::cvtColor(wrapped, gray, cv::COLOR_RGBA2GRAY);
+  else
+    cv::cvtColor(wrapped, gray, cv::COLOR_BGRA2GRAY);
   return gray;
 }
 
@@ -152,15 +156,18 @@ bool supportedCompression(const std::string& format) {
 cv::Mat toGray(const sensor_msgs::CompressedImage& m, const std::string& path, const std::string& topic,
                std::size_t ordinal) {
   if (!supportedCompression(m.format))
-    throw InputError(path, where(topic, ordinal) + ": unsupported compressed format '" + m.format +
-                               "' (supported: png, jpeg)");
+    throw InputError(
+        path, where(topic, ordinal) + ": unsupported compressed format '" + m.format + "' (supported: png, jpeg)");
   const cv::Mat decoded = cv::imdecode(m.data, cv::IMREAD_UNCHANGED);
   if (decoded.empty() || decoded.depth() != CV_8U)
     throw InputError(path, where(topic, ordinal) + ": the " + m.format + " data does not decode to an 8-bit image");
   cv::Mat gray;
-  if (decoded.channels() == 1) gray = decoded;
-  else if (decoded.channels() == 3) cv::cvtColor(decoded, gray, cv::COLOR_BGR2GRAY);
-  else cv::cvtColor(decoded, gray, cv::COLOR_BGRA2GRAY);
+  if (decoded.channels() == 1)
+    gray = decoded;
+  else if (decoded.channels() == 3)
+    cv::cvtColor(decoded, gray, cv::COLOR_BGR2GRAY);
+  else
+    cv::cvtColor(decoded, gray, cv::COLOR_BGRA2GRAY);
   return gray;
 }
 
@@ -202,8 +209,8 @@ std::vector<ImageRecord> indexImages(const rosbag::Bag& bag, const std::string& 
     }
     const auto img = messageAs<sensor_msgs::CompressedImage>(m, type, path, topic, ordinal);
     if (!supportedCompression(img->format))
-      throw InputError(path, where(topic, ordinal) + ": unsupported compressed format '" + img->format +
-                                 "' (supported: png, jpeg)");
+      throw InputError(
+          path, where(topic, ordinal) + ": unsupported compressed format '" + img->format + "' (supported: png, jpeg)");
     return stampNs(img->header.stamp);
   });
 }
@@ -212,8 +219,9 @@ std::vector<ImageRecord> indexImages(const rosbag::Bag& bag, const std::string& 
 std::vector<ImageRecord> indexSegmentation(const rosbag::Bag& bag, const std::string& path, const std::string& topic,
                                            const std::string& type) {
   return indexImageTopic(bag, path, topic, [&](const rosbag::MessageInstance& m, std::size_t ordinal) {
-    return stampNs(type == kImage ? messageAs<sensor_msgs::Image>(m, type, path, topic, ordinal)->header.stamp
-                                  : messageAs<sensor_msgs::CompressedImage>(m, type, path, topic, ordinal)->header.stamp);
+    return stampNs(type == kImage
+                       ? messageAs<sensor_msgs::Image>(m, type, path, topic, ordinal)->header.stamp
+                       : messageAs<sensor_msgs::CompressedImage>(m, type, path, topic, ordinal)->header.stamp);
   });
 }
 
@@ -264,8 +272,8 @@ std::vector<GroundTruthState> indexGroundTruth(const rosbag::Bag& bag, const std
     } else if (type == kTransform) {
       if (const auto o = m.instantiate<geometry_msgs::TransformStamped>()) {
         const auto& tr = o->transform;
-        g = poseState(stampNs(o->header.stamp), tr.translation.x, tr.translation.y, tr.translation.z,
-                      tr.rotation.w, tr.rotation.x, tr.rotation.y, tr.rotation.z);
+        g = poseState(stampNs(o->header.stamp), tr.translation.x, tr.translation.y, tr.translation.z, tr.rotation.w,
+                      tr.rotation.x, tr.rotation.y, tr.rotation.z);
         ok = true;
       }
     } else if (type == kPose) {
@@ -302,10 +310,14 @@ cv::Mat toRgb(const rosbag::MessageInstance& m, const std::string& type, const s
       throw InputError(path, where(topic, ordinal) + ": image data is shorter than height x step");
     const cv::Mat wrapped(static_cast<int>(img->height), static_cast<int>(img->width), CV_8UC(ch),
                           const_cast<std::uint8_t*>(img->data.data()), img->step);
-    if (img->encoding == "rgb8") rgb = wrapped.clone();
-    else if (img->encoding == "bgr8") cv::cvtColor(wrapped, rgb, cv::COLOR_BGR2RGB);
-    else if (img->encoding == "rgba8") cv::cvtColor(wrapped, rgb, cv::COLOR_RGBA2RGB);
-    else cv::cvtColor(wrapped, rgb, cv::COLOR_BGRA2RGB);
+    if (img->encoding == "rgb8")
+      rgb = wrapped.clone();
+    else if (img->encoding == "bgr8")
+      cv::cvtColor(wrapped, rgb, cv::COLOR_BGR2RGB);
+    else if (img->encoding == "rgba8")
+      cv::cvtColor(wrapped, rgb, cv::COLOR_RGBA2RGB);
+    else
+      cv::cvtColor(wrapped, rgb, cv::COLOR_BGRA2RGB);
   } else {
     const auto img = messageAs<sensor_msgs::CompressedImage>(m, type, path, topic, ordinal);
     const cv::Mat bgr = cv::imdecode(img->data, cv::IMREAD_COLOR);
@@ -315,86 +327,7 @@ cv::Mat toRgb(const rosbag::MessageInstance& m, const std::string& type, const s
   return rgb;
 }
 
-std::vector<std::string> splitCsv(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cell;
-  for (char c : line) {
-    if (c == ',') {
-      out.push_back(cell);
-      cell.clear();
-    } else if (c != ' ' && c != '\t' && c != '\r') {
-      cell += c;
-    }
-  }
-  out.push_back(cell);
-  return out;
-}
-
-int parseInt(const std::string& text, const std::string& path, int line, int lo, int hi) {
-  try {
-    std::size_t used = 0;
-    const int v = std::stoi(text, &used);
-    if (used == text.size() && v >= lo && v <= hi) return v;
-  } catch (const std::exception&) {
-  }
-  throw InputError(path, line, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                                   "], got '" + text + "'");
-}
-
 }  // namespace
-
-SegmentationColors readSegmentationColors(const std::string& rgb_ids_path, const std::string& vehicle_ids_path) {
-  auto lines = [](const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(path, "cannot open");
-    std::vector<std::string> out;
-    for (std::string l; std::getline(in, l);) out.push_back(l);
-    return out;
-  };
-  // Moving vehicles, in file order: their mask value is 1 + position.
-  std::map<int, std::uint8_t> label_of_id;
-  const auto vehicles = lines(vehicle_ids_path);
-  for (std::size_t i = 1; i < vehicles.size(); ++i) {  // line 1: header
-    if (vehicles[i].find_first_not_of(" \t\r") == std::string::npos) continue;
-    const auto cells = splitCsv(vehicles[i]);
-    if (cells.size() != 2) throw InputError(vehicle_ids_path, static_cast<int>(i + 1), "expected 'id, name'");
-    const int id = parseInt(cells[0], vehicle_ids_path, static_cast<int>(i + 1), 0, 255);
-    if (cells[1].find("dynamic") != std::string::npos) {
-      if (label_of_id.size() >= 255) throw InputError(vehicle_ids_path, "more than 255 moving vehicles");
-      label_of_id[id] = static_cast<std::uint8_t>(label_of_id.size() + 1);
-    }
-  }
-  SegmentationColors colors;
-  const auto rgb = lines(rgb_ids_path);
-  for (std::size_t i = 1; i < rgb.size(); ++i) {
-    if (rgb[i].find_first_not_of(" \t\r") == std::string::npos) continue;
-    const auto cells = splitCsv(rgb[i]);
-    const int line = static_cast<int>(i + 1);
-    if (cells.size() != 4) throw InputError(rgb_ids_path, line, "expected 'id,r,g,b'");
-    const int id = parseInt(cells[0], rgb_ids_path, line, 0, 255);
-    const std::uint32_t key = (static_cast<std::uint32_t>(parseInt(cells[1], rgb_ids_path, line, 0, 255)) << 16) |
-                              (static_cast<std::uint32_t>(parseInt(cells[2], rgb_ids_path, line, 0, 255)) << 8) |
-                              static_cast<std::uint32_t>(parseInt(cells[3], rgb_ids_path, line, 0, 255));
-    const auto it = label_of_id.find(id);
-    colors.label_of_rgb[key] = it == label_of_id.end() ? 0 : it->second;
-  }
-  return colors;
-}
-
-cv::Mat labelsFromColors(const cv::Mat& rgb, const SegmentationColors& colors) {
-  cv::Mat labels(rgb.size(), CV_8UC1, cv::Scalar(0));
-  for (int y = 0; y < rgb.rows; ++y) {
-    const cv::Vec3b* in = rgb.ptr<cv::Vec3b>(y);
-    uchar* out = labels.ptr<uchar>(y);
-    for (int x = 0; x < rgb.cols; ++x) {
-      const std::uint32_t key = (static_cast<std::uint32_t>(in[x][0]) << 16) |
-                                (static_cast<std::uint32_t>(in[x][1]) << 8) | in[x][2];
-      const auto it = colors.label_of_rgb.find(key);
-      out[x] = it == colors.label_of_rgb.end() ? 0 : it->second;
-    }
-  }
-  return labels;
-}
 
 bool isBagFile(const std::string& path) {
   std::error_code ec;
@@ -437,8 +370,7 @@ BagIndex indexBag(const std::string& path, const BagTopics& topics, int expected
       ds.has_groundtruth = !ds.groundtruth.empty();
     }
     if (!topics.segmentation.empty()) {
-      const std::string ts =
-          checkTopic(path, types, topics.segmentation, "segmentation_topic", {kImage, kCompressed});
+      const std::string ts = checkTopic(path, types, topics.segmentation, "segmentation_topic", {kImage, kCompressed});
       index.segmentation = indexSegmentation(bag, path, topics.segmentation, ts);
     }
     if (ds.cam0.empty()) throw InputError(path, "topic '" + topics.image0 + "' holds no images");
@@ -536,9 +468,9 @@ bool BagSource::nextPairImages(cv::Mat& left, cv::Mat& right, cv::Mat& mask) {
   if (masks_) {
     seg_k = index_.segmentation_of_pair[next_pair_];
     if (seg_k < 0)
-      throw InputError(index_.path, "frame " + std::to_string(next_pair_ + 1) + " (cam0 stamp " +
-                                        std::to_string(pair.t_ns) + " ns) has no segmentation image with its stamp on '" +
-                                        index_.topics.segmentation + "'");
+      throw InputError(index_.path,
+                       "frame " + std::to_string(next_pair_ + 1) + " (cam0 stamp " + std::to_string(pair.t_ns) +
+                           " ns) has no segmentation image with its stamp on '" + index_.topics.segmentation + "'");
   }
   const std::size_t seg_i = static_cast<std::size_t>(std::max(0L, seg_k));
   const std::string& path = index_.path;

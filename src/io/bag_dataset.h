@@ -11,8 +11,8 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
-#include <unordered_map>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "io/data_source.h"
@@ -64,8 +64,8 @@ struct BagIndex {
   BagTopics topics;
   std::vector<BagTopicInfo> all_topics;
   EurocDataset dataset;
-  std::vector<ImageRecord> segmentation;  ///< stamps of the segmentation topic (when named)
-  std::vector<long> segmentation_of_pair; ///< per pair: the segmentation image with cam0's stamp, -1 = none
+  std::vector<ImageRecord> segmentation;   ///< stamps of the segmentation topic (when named)
+  std::vector<long> segmentation_of_pair;  ///< per pair: the segmentation image with cam0's stamp, -1 = none
 };
 
 /// True when `path` names a bag file (a regular file whose first bytes are the
@@ -80,8 +80,8 @@ bool isBagFile(const std::string& path);
 /// one clear line: a truncated or unindexed bag (`rosbag reindex`), a missing topic
 /// (with the image and IMU topics the bag has), an unsupported message type or
 /// encoding, a size mismatch, stamps going backwards, an empty bag.
-BagIndex indexBag(const std::string& path, const BagTopics& topics, int expected_width = 0,
-                  int expected_height = 0, const EurocOptions& options = {});
+BagIndex indexBag(const std::string& path, const BagTopics& topics, int expected_width = 0, int expected_height = 0,
+                  const EurocOptions& options = {});
 
 /// Streams an indexed bag: IMU samples and stereo frames in time order, as
 /// EurocSource does for folders. Images are converted to 8-bit gray as OpenCV does

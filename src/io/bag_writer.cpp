@@ -36,8 +36,10 @@ std::vector<std::vector<std::string>> tableRows(const std::string& path) {
   while (std::getline(in, line)) {
     std::vector<std::string> cells{""};
     for (char c : line) {
-      if (c == ',') cells.emplace_back();
-      else if (c != ' ' && c != '\t' && c != '\r') cells.back() += c;
+      if (c == ',')
+        cells.emplace_back();
+      else if (c != ' ' && c != '\t' && c != '\r')
+        cells.back() += c;
     }
     if (!(cells.size() == 1 && cells[0].empty())) rows.push_back(cells);
   }
@@ -87,7 +89,8 @@ sensor_msgs::Image imageMsg(const cv::Mat& image, TimeNs t, const std::string& f
   m.step = static_cast<std::uint32_t>(image.cols * image.channels());
   m.data.resize(static_cast<std::size_t>(m.step) * m.height);
   for (int y = 0; y < image.rows; ++y)
-    std::copy(image.ptr<uchar>(y), image.ptr<uchar>(y) + m.step, m.data.begin() + static_cast<std::ptrdiff_t>(y) * m.step);
+    std::copy(image.ptr<uchar>(y), image.ptr<uchar>(y) + m.step,
+              m.data.begin() + static_cast<std::ptrdiff_t>(y) * m.step);
   return m;
 }
 
@@ -145,8 +148,10 @@ void writeViodeBag(const EurocDataset& ds, const std::string& bag_path, const Ba
   rosbag::Bag bag;
   try {
     bag.open(bag_path, rosbag::bagmode::Write);
-    if (options.compression == "bz2") bag.setCompression(rosbag::compression::BZ2);
-    else if (options.compression == "lz4") bag.setCompression(rosbag::compression::LZ4);
+    if (options.compression == "bz2")
+      bag.setCompression(rosbag::compression::BZ2);
+    else if (options.compression == "lz4")
+      bag.setCompression(rosbag::compression::LZ4);
     else if (options.compression != "none")
       throw InputError(bag_path, "unknown compression '" + options.compression + "' (none, bz2, lz4)");
     // Messages in time order: IMU and ground truth with a stamp up to a frame's come first.

@@ -67,10 +67,11 @@ std::vector<TableRow> readTable(const std::string& path, const TableOptions& opt
     const int n = static_cast<int>(row.fields.size());
     if (n < options.min_columns || (max_cols > 0 && n > max_cols)) {
       std::string expected = std::to_string(options.min_columns);
-      if (max_cols == 0) expected = "at least " + expected;
-      else if (max_cols != options.min_columns) expected += " to " + std::to_string(max_cols);
-      throw InputError(path, line_no,
-                       "expected " + expected + " columns, got " + std::to_string(n));
+      if (max_cols == 0)
+        expected = "at least " + expected;
+      else if (max_cols != options.min_columns)
+        expected += " to " + std::to_string(max_cols);
+      throw InputError(path, line_no, "expected " + expected + " columns, got " + std::to_string(n));
     }
     rows.push_back(std::move(row));
   }
@@ -85,8 +86,7 @@ TimeNs parseTimeNs(const std::string& text, const std::string& path, int line, i
   auto [ptr, ec] = std::from_chars(text.data(), end, value);
   if (ec != std::errc() || ptr != end || text.empty()) {
     throw InputError(path, line,
-                     columnText(column) + ": expected an integer time stamp in nanoseconds, got '" +
-                         text + "'");
+                     columnText(column) + ": expected an integer time stamp in nanoseconds, got '" + text + "'");
   }
   return value;
 }
@@ -100,21 +100,18 @@ double parseFinite(const std::string& text, const std::string& path, int line, i
     throw InputError(path, line, columnText(column) + ": expected a number, got '" + text + "'");
   }
   if (!std::isfinite(value) || errno == ERANGE) {
-    throw InputError(path, line,
-                     columnText(column) + ": expected a finite number, got '" + text + "'");
+    throw InputError(path, line, columnText(column) + ": expected a finite number, got '" + text + "'");
   }
   return value;
 }
 
-void checkIncreasing(const std::vector<TimeNs>& stamps, const std::vector<int>& lines,
-                     const std::string& path) {
+void checkIncreasing(const std::vector<TimeNs>& stamps, const std::vector<int>& lines, const std::string& path) {
   for (std::size_t i = 1; i < stamps.size(); ++i) {
     if (stamps[i] <= stamps[i - 1]) {
       throw InputError(path, lines[i],
-                       std::string(stamps[i] == stamps[i - 1] ? "duplicate" : "non-increasing") +
-                           " time stamp " + std::to_string(stamps[i]) +
-                           " (expected after " + std::to_string(stamps[i - 1]) + " on line " +
-                           std::to_string(lines[i - 1]) + ")");
+                       std::string(stamps[i] == stamps[i - 1] ? "duplicate" : "non-increasing") + " time stamp " +
+                           std::to_string(stamps[i]) + " (expected after " + std::to_string(stamps[i - 1]) +
+                           " on line " + std::to_string(lines[i - 1]) + ")");
     }
   }
 }

@@ -35,7 +35,6 @@ TimeNs parseTimeNs(const std::string& text, const std::string& path, int line, i
 double parseFinite(const std::string& text, const std::string& path, int line, int column);
 
 /// Throws InputError unless every row's time stamp is strictly after the previous one.
-void checkIncreasing(const std::vector<TimeNs>& stamps, const std::vector<int>& lines,
-                     const std::string& path);
+void checkIncreasing(const std::vector<TimeNs>& stamps, const std::vector<int>& lines, const std::string& path);
 
 }  // namespace idyvins::io

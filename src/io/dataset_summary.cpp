@@ -23,8 +23,7 @@ StreamStats streamStats(const std::vector<TimeNs>& stamps) {
   s.rate_hz = median > 0 ? 1.0 / toSeconds(median) : 0.0;
   const TimeNs max_dt = *std::max_element(dt.begin(), dt.end());
   s.max_gap_s = toSeconds(max_dt);
-  s.gaps = static_cast<std::size_t>(std::count_if(
-      dt.begin(), dt.end(), [&](TimeNs d) { return 2 * d > 3 * median; }));
+  s.gaps = static_cast<std::size_t>(std::count_if(dt.begin(), dt.end(), [&](TimeNs d) { return 2 * d > 3 * median; }));
   return s;
 }
 
@@ -40,8 +39,7 @@ DatasetSummary summarize(const EurocDataset& ds) {
   s.cam0 = streamStats(stamps(ds.cam0, [](const ImageRecord& x) { return x.t_ns; }));
   s.cam1 = streamStats(stamps(ds.cam1, [](const ImageRecord& x) { return x.t_ns; }));
   s.pairs = streamStats(stamps(ds.pairs, [](const StereoPair& x) { return x.t_ns; }));
-  s.groundtruth =
-      streamStats(stamps(ds.groundtruth, [](const GroundTruthState& x) { return x.t_ns; }));
+  s.groundtruth = streamStats(stamps(ds.groundtruth, [](const GroundTruthState& x) { return x.t_ns; }));
   s.stereo = ds.stereo();
   s.has_groundtruth = ds.has_groundtruth;
   s.unmatched0 = ds.unmatched0.size();

@@ -12,10 +12,10 @@ namespace idyvins::io {
 struct StreamStats {
   std::size_t count = 0;
   TimeNs first_ns = 0, last_ns = 0;
-  double span_s = 0;        ///< last - first
-  double rate_hz = 0;       ///< 1 / median interval
-  double max_gap_s = 0;     ///< largest interval
-  std::size_t gaps = 0;     ///< intervals longer than 1.5x the median
+  double span_s = 0;     ///< last - first
+  double rate_hz = 0;    ///< 1 / median interval
+  double max_gap_s = 0;  ///< largest interval
+  std::size_t gaps = 0;  ///< intervals longer than 1.5x the median
 };
 
 /// Computes stream statistics from increasing time stamps.

@@ -93,8 +93,7 @@ std::vector<GroundTruthState> readGroundTruthCsv(const std::string& path) {
     const double norm = s.q_w_b.norm();
     if (std::abs(norm - 1.0) > 1e-2) {
       throw InputError(path, r.line,
-                       "columns 5-8: expected a unit quaternion w x y z, norm is " +
-                           std::to_string(norm));
+                       "columns 5-8: expected a unit quaternion w x y z, norm is " + std::to_string(norm));
     }
     s.q_w_b.normalize();
     s.v_w = vec3(r, 8, path);
@@ -104,9 +103,9 @@ std::vector<GroundTruthState> readGroundTruthCsv(const std::string& path) {
   return gt;
 }
 
-void pairByTime(const std::vector<ImageRecord>& cam0, const std::vector<ImageRecord>& cam1,
-                TimeNs tolerance_ns, std::vector<StereoPair>& pairs,
-                std::vector<std::size_t>& unmatched0, std::vector<std::size_t>& unmatched1) {
+void pairByTime(const std::vector<ImageRecord>& cam0, const std::vector<ImageRecord>& cam1, TimeNs tolerance_ns,
+                std::vector<StereoPair>& pairs, std::vector<std::size_t>& unmatched0,
+                std::vector<std::size_t>& unmatched1) {
   pairs.clear();
   unmatched0.clear();
   unmatched1.clear();
@@ -119,8 +118,7 @@ void pairByTime(const std::vector<ImageRecord>& cam0, const std::vector<ImageRec
     std::size_t best = cam1.size();
     for (std::size_t k = j; k < cam1.size() && cam1[k].t_ns <= t + tolerance_ns; ++k) {
       if (used1[k]) continue;
-      if (best == cam1.size() || std::llabs(cam1[k].t_ns - t) < std::llabs(cam1[best].t_ns - t))
-        best = k;
+      if (best == cam1.size() || std::llabs(cam1[k].t_ns - t) < std::llabs(cam1[best].t_ns - t)) best = k;
     }
     if (best == cam1.size()) {
       unmatched0.push_back(i);
@@ -153,8 +151,7 @@ EurocDataset readEurocDataset(const std::string& dir, const EurocOptions& option
   }
 
   if (ds.stereo()) {
-    pairByTime(ds.cam0, ds.cam1, options.pair_tolerance_ns, ds.pairs, ds.unmatched0,
-               ds.unmatched1);
+    pairByTime(ds.cam0, ds.cam1, options.pair_tolerance_ns, ds.pairs, ds.unmatched0, ds.unmatched1);
   } else {
     for (std::size_t i = 0; i < ds.cam0.size(); ++i) ds.pairs.push_back({ds.cam0[i].t_ns, i, 0});
   }
@@ -170,8 +167,7 @@ EurocDataset readEurocDataset(const std::string& dir, const EurocOptions& option
   return ds;
 }
 
-cv::Mat loadGrayImage(const ImageRecord& record, const std::string& csv_path, int expected_width,
-                      int expected_height) {
+cv::Mat loadGrayImage(const ImageRecord& record, const std::string& csv_path, int expected_width, int expected_height) {
   if (!fs::is_regular_file(record.path))
     throw InputError(csv_path, record.csv_line, "image file missing: " + record.path);
   // Read here and decoded from memory: a PNG cut short (no IEND chunk at its end) is refused
@@ -185,13 +181,11 @@ cv::Mat loadGrayImage(const ImageRecord& record, const std::string& csv_path, in
     throw InputError(csv_path, record.csv_line, "truncated PNG (no IEND chunk at its end): " + record.path);
   cv::Mat image = bytes.empty() ? cv::Mat() : cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
   if (image.empty())
-    throw InputError(csv_path, record.csv_line,
-                     "image file unreadable (expected an 8-bit PNG): " + record.path);
+    throw InputError(csv_path, record.csv_line, "image file unreadable (expected an 8-bit PNG): " + record.path);
   if (expected_width > 0 && (image.cols != expected_width || image.rows != expected_height)) {
     throw InputError(csv_path, record.csv_line,
-                     "image " + record.path + " is " + std::to_string(image.cols) + "x" +
-                         std::to_string(image.rows) + ", expected " +
-                         std::to_string(expected_width) + "x" + std::to_string(expected_height) +
+                     "image " + record.path + " is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                         ", expected " + std::to_string(expected_width) + "x" + std::to_string(expected_height) +
                          " (image_width/image_height of the config)");
   }
   return image;

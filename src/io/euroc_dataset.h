@@ -32,8 +32,8 @@ struct EurocOptions {
 struct EurocDataset {
   std::string root;  ///< the mav0 folder
   std::vector<ImuSample> imu;
-  std::vector<ImageRecord> cam0, cam1;  ///< cam1 empty when the folder has none
-  std::vector<StereoPair> pairs;        ///< cam0/cam1 rows matched by time stamp
+  std::vector<ImageRecord> cam0, cam1;              ///< cam1 empty when the folder has none
+  std::vector<StereoPair> pairs;                    ///< cam0/cam1 rows matched by time stamp
   std::vector<std::size_t> unmatched0, unmatched1;  ///< rows without a partner
   std::vector<GroundTruthState> groundtruth;        ///< empty when absent
   bool has_groundtruth = false;
@@ -56,12 +56,11 @@ std::vector<GroundTruthState> readGroundTruthCsv(const std::string& path);
 
 /// Loads an image as 8-bit gray; throws InputError if it is missing, unreadable,
 /// or (when expected_width > 0) of another size.
-cv::Mat loadGrayImage(const ImageRecord& record, const std::string& csv_path, int expected_width,
-                      int expected_height);
+cv::Mat loadGrayImage(const ImageRecord& record, const std::string& csv_path, int expected_width, int expected_height);
 
 /// Pairs two time-sorted lists by nearest time stamp within the tolerance.
-void pairByTime(const std::vector<ImageRecord>& cam0, const std::vector<ImageRecord>& cam1,
-                TimeNs tolerance_ns, std::vector<StereoPair>& pairs,
-                std::vector<std::size_t>& unmatched0, std::vector<std::size_t>& unmatched1);
+void pairByTime(const std::vector<ImageRecord>& cam0, const std::vector<ImageRecord>& cam1, TimeNs tolerance_ns,
+                std::vector<StereoPair>& pairs, std::vector<std::size_t>& unmatched0,
+                std::vector<std::size_t>& unmatched1);
 
 }  // namespace idyvins::io

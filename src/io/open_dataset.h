@@ -17,10 +17,10 @@ namespace idyvins::io {
 /// What opening a dataset reads beside the files themselves (pipeline::datasetRequest makes it
 /// from a Config).
 struct DatasetRequest {
-  BagTopics topics;                      ///< bag only: the topics to read
+  BagTopics topics;                       ///< bag only: the topics to read
   int image_width = 0, image_height = 0;  ///< expected image size (0: any)
-  ExpectedRig rig;                       ///< what the streams are checked against (checkPlausible)
-  bool masks = true;                     ///< read ground-truth masks where the dataset has them
+  ExpectedRig rig;                        ///< what the streams are checked against (checkPlausible)
+  bool masks = true;                      ///< read ground-truth masks where the dataset has them
   /// Bag only: VIODE's colour tables for the segmentation topic (readSegmentationColors).
   std::string segmentation_rgb_ids, segmentation_vehicle_ids;
 };

@@ -66,8 +66,10 @@ void removeListed(const fs::path& folder, const std::vector<std::string>& entrie
   std::error_code ec;
   std::vector<std::string> dirs;
   for (const std::string& e : entries) {
-    if (!e.empty() && e.back() == '/') dirs.push_back(e);
-    else fs::remove(folder / e, ec);
+    if (!e.empty() && e.back() == '/')
+      dirs.push_back(e);
+    else
+      fs::remove(folder / e, ec);
   }
   std::sort(dirs.begin(), dirs.end(), [](const std::string& a, const std::string& b) { return a.size() > b.size(); });
   for (const std::string& d : dirs) fs::remove(folder / d, ec);  // fails (kept) unless empty
@@ -97,8 +99,8 @@ FolderVerdict inspectFolder(const std::string& folder, const OutputFolderOptions
     std::set<std::string> top;
     for (const auto& e : fs::directory_iterator(folder, ec)) top.insert(e.path().filename().string());
     for (const std::string& name : top)
-      legacy = legacy && std::find(options.legacy_names.begin(), options.legacy_names.end(), name) !=
-                             options.legacy_names.end();
+      legacy = legacy &&
+               std::find(options.legacy_names.begin(), options.legacy_names.end(), name) != options.legacy_names.end();
     for (const std::string& name : options.legacy_required) legacy = legacy && top.count(name) > 0;
   }
   for (const std::string& e : entries) {
@@ -133,8 +135,7 @@ OutputFolder::OutputFolder(const std::string& out, OutputFolderOptions options) 
     throw InputError(out, "is read-only: idyvins leaves it as it is (make it writable or name another folder)");
   if (!v.foreign.empty() && !options_.force)
     throw InputError(out, "holds " + std::to_string(v.foreign.size()) + " file(s) idyvins " + options_.tool +
-                              " did not write (" + quoted(v.foreign.front()) +
-                              (v.foreign.size() > 1 ? ", ..." : "") +
+                              " did not write (" + quoted(v.foreign.front()) + (v.foreign.size() > 1 ? ", ..." : "") +
                               "): name a new or empty folder, or pass --force to write beside them (none is removed)");
   staging_ = final_ + ".partial-" + std::to_string(::getpid());
   std::error_code ec;
@@ -201,8 +202,7 @@ std::vector<std::string> OutputFolder::publish() {
     if (!ec) {
       removeListed(old, v.ours);
       std::error_code rm;
-      if (!fs::remove(old, rm))
-        warnings.push_back("kept " + old + ": files appeared in the old folder during the run");
+      if (!fs::remove(old, rm)) warnings.push_back("kept " + old + ": files appeared in the old folder during the run");
     }
   } else {  // --force beside foreign files: the tool's own files replaced, the others left
     removeListed(final_, v.ours);
@@ -226,8 +226,8 @@ std::vector<std::string> OutputFolder::publish() {
   }
   published_ = true;  // from here the staging folder is kept: on failure it holds the only copy of the results
   if (ec)
-    throw InputError(final_, "cannot move the finished results into place (" + ec.message() + "): they are in " +
-                                 staging_);
+    throw InputError(final_,
+                     "cannot move the finished results into place (" + ec.message() + "): they are in " + staging_);
   return warnings;
 }
 

@@ -11,9 +11,12 @@ namespace idyvins::io {
 
 int plyLabel(FeatureLabel label) {
   switch (label) {
-    case FeatureLabel::kEliminated: return 1;
-    case FeatureLabel::kConfirmedDynamic: return 2;
-    default: return 0;
+    case FeatureLabel::kEliminated:
+      return 1;
+    case FeatureLabel::kConfirmedDynamic:
+      return 2;
+    default:
+      return 0;
   }
 }
 
@@ -37,9 +40,17 @@ namespace {
 
 /// The vertex count of writePly's header; leaves `in` at the first vertex line.
 std::size_t readPlyHeader(std::istream& in, const std::string& path, int& line_no) {
-  static const char* const expected[] = {"ply", "format ascii 1.0", nullptr, nullptr, "property float x",
-                                         "property float y", "property float z", "property uchar label",
-                                         "property uchar red", "property uchar green", "property uchar blue",
+  static const char* const expected[] = {"ply",
+                                         "format ascii 1.0",
+                                         nullptr,
+                                         nullptr,
+                                         "property float x",
+                                         "property float y",
+                                         "property float z",
+                                         "property uchar label",
+                                         "property uchar red",
+                                         "property uchar green",
+                                         "property uchar blue",
                                          "end_header"};
   std::size_t count = 0;
   std::string line;
@@ -75,7 +86,8 @@ std::vector<LabelledPoint> readPly(const std::string& path) {
   std::string line;
   while (std::getline(in, line)) {
     ++line_no;
-    if (points.size() == count) throw InputError(path, line_no, "more vertices than the header's " + std::to_string(count));
+    if (points.size() == count)
+      throw InputError(path, line_no, "more vertices than the header's " + std::to_string(count));
     std::istringstream ss(line);
     LabelledPoint pt;
     int r = 0, g = 0, b = 0;
@@ -86,7 +98,8 @@ std::vector<LabelledPoint> readPly(const std::string& path) {
     points.push_back(pt);
   }
   if (points.size() != count)
-    throw InputError(path, line_no, "file ends after " + std::to_string(points.size()) + " of " + std::to_string(count) + " vertices");
+    throw InputError(path, line_no,
+                     "file ends after " + std::to_string(points.size()) + " of " + std::to_string(count) + " vertices");
   return points;
 }
 

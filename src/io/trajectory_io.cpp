@@ -18,8 +18,7 @@ FilePtr openForWrite(const std::string& path) {
   return f;
 }
 
-Eigen::Quaterniond unitQuaternion(double w, double x, double y, double z, const std::string& path,
-                                  int line) {
+Eigen::Quaterniond unitQuaternion(double w, double x, double y, double z, const std::string& path, int line) {
   Eigen::Quaterniond q(w, x, y, z);
   const double n = q.norm();
   if (std::abs(n - 1.0) > 1e-2)
@@ -28,8 +27,7 @@ Eigen::Quaterniond unitQuaternion(double w, double x, double y, double z, const 
   return q;
 }
 
-void checkTimes(const std::vector<StampedPose>& poses, const std::vector<int>& lines,
-                const std::string& path) {
+void checkTimes(const std::vector<StampedPose>& poses, const std::vector<int>& lines, const std::string& path) {
   std::vector<TimeNs> stamps;
   stamps.reserve(poses.size());
   for (const auto& p : poses) stamps.push_back(p.t_ns);
@@ -43,8 +41,8 @@ void writeTum(const std::string& path, const std::vector<StampedPose>& poses) {
   std::fprintf(f.get(), "# timestamp tx ty tz qx qy qz qw\n");
   for (const auto& p : poses) {
     const auto& q = p.q_w_b;
-    std::fprintf(f.get(), "%s %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", formatSeconds(p.t_ns).c_str(),
-                 p.p_w_b.x(), p.p_w_b.y(), p.p_w_b.z(), q.x(), q.y(), q.z(), q.w());
+    std::fprintf(f.get(), "%s %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", formatSeconds(p.t_ns).c_str(), p.p_w_b.x(),
+                 p.p_w_b.y(), p.p_w_b.z(), q.x(), q.y(), q.z(), q.w());
   }
   if (std::ferror(f.get())) throw InputError(path, "write failed");
 }
@@ -56,9 +54,8 @@ void writeEurocCsv(const std::string& path, const std::vector<StampedPose>& pose
                "q_RS_y [],q_RS_z []\n");
   for (const auto& p : poses) {
     const auto& q = p.q_w_b;
-    std::fprintf(f.get(), "%lld,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n",
-                 static_cast<long long>(p.t_ns), p.p_w_b.x(), p.p_w_b.y(), p.p_w_b.z(), q.w(),
-                 q.x(), q.y(), q.z());
+    std::fprintf(f.get(), "%lld,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n", static_cast<long long>(p.t_ns), p.p_w_b.x(),
+                 p.p_w_b.y(), p.p_w_b.z(), q.w(), q.x(), q.y(), q.z());
   }
   if (std::ferror(f.get())) throw InputError(path, "write failed");
 }
@@ -70,10 +67,11 @@ void writeStateCsv(const std::string& path, const std::vector<GroundTruthState>&
                "v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], "
                "b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], b_a_RS_S_z [m s^-2]\n");
   for (const auto& g : states) {
-    std::fprintf(f.get(), "%lld,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n",
-                 static_cast<long long>(g.t_ns), g.p_w_b.x(), g.p_w_b.y(), g.p_w_b.z(), g.q_w_b.w(), g.q_w_b.x(),
-                 g.q_w_b.y(), g.q_w_b.z(), g.v_w.x(), g.v_w.y(), g.v_w.z(), g.bg.x(), g.bg.y(), g.bg.z(), g.ba.x(),
-                 g.ba.y(), g.ba.z());
+    std::fprintf(
+        f.get(),
+        "%lld,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n",
+        static_cast<long long>(g.t_ns), g.p_w_b.x(), g.p_w_b.y(), g.p_w_b.z(), g.q_w_b.w(), g.q_w_b.x(), g.q_w_b.y(),
+        g.q_w_b.z(), g.v_w.x(), g.v_w.y(), g.v_w.z(), g.bg.x(), g.bg.y(), g.bg.z(), g.ba.x(), g.ba.y(), g.ba.z());
   }
   if (std::ferror(f.get())) throw InputError(path, "write failed");
 }
@@ -86,8 +84,7 @@ std::vector<StampedPose> readTum(const std::string& path) {
     StampedPose p;
     const auto t = parseSecondsExact(r.fields[0]);
     if (!t)
-      throw InputError(path, r.line,
-                       "column 1: expected a time stamp in decimal seconds, got '" + r.fields[0] + "'");
+      throw InputError(path, r.line, "column 1: expected a time stamp in decimal seconds, got '" + r.fields[0] + "'");
     p.t_ns = *t;
     double v[7];
     for (int i = 0; i < 7; ++i) v[i] = parseFinite(r.fields[i + 1], path, r.line, i + 2);
@@ -107,9 +104,9 @@ std::vector<StampedPose> readEurocCsv(const std::string& path) {
   const std::size_t ncols = rows.front().fields.size();
   for (const auto& r : rows) {
     if (r.fields.size() != ncols || (ncols != 8 && ncols < 17))
-      throw InputError(path, r.line,
-                       "expected 8 columns (t, p xyz, q wxyz) or 17 (EuRoC ground truth), got " +
-                           std::to_string(r.fields.size()));
+      throw InputError(
+          path, r.line,
+          "expected 8 columns (t, p xyz, q wxyz) or 17 (EuRoC ground truth), got " + std::to_string(r.fields.size()));
     StampedPose p;
     p.t_ns = parseTimeNs(r.fields[0], path, r.line, 1);
     double v[7];

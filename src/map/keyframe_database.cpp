@@ -60,8 +60,8 @@ std::uint32_t KeyframeDatabase::add(Keyframe keyframe) {
   return keyframes_.back().id;
 }
 
-std::vector<PlaceCandidate> KeyframeDatabase::query(const std::vector<Descriptor>& descriptors,
-                                                    TimeNs before_t_ns, std::uint32_t any_age_below) const {
+std::vector<PlaceCandidate> KeyframeDatabase::query(const std::vector<Descriptor>& descriptors, TimeNs before_t_ns,
+                                                    std::uint32_t any_age_below) const {
   std::vector<PlaceCandidate> out;
   if (descriptors.empty() || owner_.empty()) return out;
   const int k = std::max(1, options_.neighbours);

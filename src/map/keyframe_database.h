@@ -29,9 +29,9 @@ int hamming(const Descriptor& a, const Descriptor& b);
 /// A static landmark as a keyframe saw it.
 struct KeyframeLandmark {
   std::uint64_t id = 0;
-  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();   ///< world position (odometry frame)
-  Eigen::Vector2d xy = Eigen::Vector2d::Zero();    ///< left camera, normalized undistorted
-  Descriptor descriptor{};                         ///< at its corner in this keyframe
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();  ///< world position (odometry frame)
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();   ///< left camera, normalized undistorted
+  Descriptor descriptor{};                        ///< at its corner in this keyframe
 };
 
 struct Keyframe {

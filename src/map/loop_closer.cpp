@@ -43,7 +43,8 @@ LoopCloser::~LoopCloser() {
 
 void LoopCloser::loadMap(const SavedMap& map, bool extend) {
   if (added_ || database_.size() > 0) throw std::logic_error("LoopCloser::loadMap after keyframes were added");
-  if (map.keyframes.size() != map.nodes.size()) throw std::invalid_argument("LoopCloser::loadMap: one node per keyframe");
+  if (map.keyframes.size() != map.nodes.size())
+    throw std::invalid_argument("LoopCloser::loadMap: one node per keyframe");
   for (const Keyframe& k : map.keyframes) database_.add(k);
   graph_.loadMap(map.nodes, map.loops);
   loaded_ = map.keyframes.size();
@@ -130,7 +131,8 @@ void LoopCloser::handle(LoopKeyframe& in) {
   }
   in.landmarks = std::move(used);
   std::vector<cv::Point2f> corners;
-  for (const LoopLandmark& l : in.landmarks) corners.emplace_back(static_cast<float>(l.uv.x()), static_cast<float>(l.uv.y()));
+  for (const LoopLandmark& l : in.landmarks)
+    corners.emplace_back(static_cast<float>(l.uv.x()), static_cast<float>(l.uv.y()));
   const std::size_t n_landmarks = corners.size();
   for (const cv::Point2f& c : recognitionCorners(in.left, options_.extra_corners)) corners.push_back(c);
   std::vector<int> kept;
@@ -212,8 +214,8 @@ bool LoopCloser::tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint
       continue;
     }
     graph_.addLoop({c.keyframe, new_node, rel});
-    loops_.push_back({c.keyframe, new_node, old.t_ns, now.t_ns, c.votes, v.matches, v.inliers, v.sigma_position_m, rel,
-                      false});
+    loops_.push_back(
+        {c.keyframe, new_node, old.t_ns, now.t_ns, c.votes, v.matches, v.inliers, v.sigma_position_m, rel, false});
     ++stats_.loops;
     return true;
   }
@@ -221,7 +223,8 @@ bool LoopCloser::tryLoop(const Keyframe& now, const PlaceQuery& query, std::uint
 }
 
 bool loopWithinDrift(const Eigen::Vector3d& p_old, const Eigen::Quaterniond& q_old, const Eigen::Vector3d& p_now,
-                     const Eigen::Quaterniond& q_now, const RelativePose4& rel, double path_m, const LoopOptions& options) {
+                     const Eigen::Quaterniond& q_now, const RelativePose4& rel, double path_m,
+                     const LoopOptions& options) {
   const double shift = (p_old + q_old * rel.t_from_to - p_now).norm();
   const double turn = std::abs(wrapAngle(yawOf(q_old) + rel.dyaw - yawOf(q_now)));
   return shift <= options.max_loop_shift_m + options.max_loop_shift_per_m * path_m &&
@@ -259,8 +262,9 @@ bool LoopCloser::mapMatch(const Keyframe& now, std::uint32_t old_id, std::uint32
   graph_.correctedPose(new_node, p_now, q_now);
   const Eigen::Vector3d p_map = p_old + q_old * rel.t_from_to;
   const double yaw_map = wrapAngle(yawOf(q_old) + rel.dyaw);
-  const LoopEvent event{old_id,    new_node,  database_.keyframe(old_id).t_ns, now.t_ns, c.votes, v.matches,
-                        v.inliers, v.sigma_position_m, rel, true};
+  const LoopEvent event{
+      old_id, new_node, database_.keyframe(old_id).t_ns, now.t_ns, c.votes, v.matches, v.inliers, v.sigma_position_m,
+      rel,    true};
   if (stats_.relocalized) {  // tied to the map already: against the current map pose
     if (!consistent(old_id, new_node, rel, solvedNode())) {
       ++stats_.refused_by_consistency;
@@ -321,6 +325,5 @@ SavedMap LoopCloser::savedMap() const {
   if (!m.nodes.empty()) m.nodes.front().fixed = true;
   return m;
 }
-
 
 }  // namespace idyvins::map

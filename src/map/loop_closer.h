@@ -38,7 +38,7 @@ struct LoopLandmark {
 /// One keyframe handed to the loop closer.
 struct LoopKeyframe {
   TimeNs t_ns = 0;
-  Eigen::Vector3d p_w_b = Eigen::Vector3d::Zero();   ///< odometry pose
+  Eigen::Vector3d p_w_b = Eigen::Vector3d::Zero();  ///< odometry pose
   Eigen::Quaterniond q_w_b = Eigen::Quaterniond::Identity();
   cv::Mat left;  ///< the left image (gray)
   std::vector<LoopLandmark> landmarks;
@@ -50,8 +50,8 @@ struct LoopEvent {
   TimeNs old_t_ns = 0, new_t_ns = 0;
   int votes = 0, matches = 0, inliers = 0;
   double sigma_position_m = 0;  ///< PnP position uncertainty (PlaceVerification)
-  RelativePose4 relative;  ///< new keyframe in the old one's frame (from PnP)
-  bool to_map = false;     ///< the old keyframe is from a loaded map (a relocalization)
+  RelativePose4 relative;       ///< new keyframe in the old one's frame (from PnP)
+  bool to_map = false;          ///< the old keyframe is from a loaded map (a relocalization)
 };
 
 struct LoopStats {
@@ -61,8 +61,8 @@ struct LoopStats {
   std::size_t graph_solves = 0;
   std::size_t landmarks = 0, candidates_kept_apart = 0;  ///< handed over with the keyframes taken
   // With a loaded map (loadMap):
-  std::size_t map_keyframes = 0;    ///< keyframes loaded
-  std::size_t map_loops = 0;        ///< loops to the map's keyframes (relocalizations included)
+  std::size_t map_keyframes = 0;                ///< keyframes loaded
+  std::size_t map_loops = 0;                    ///< loops to the map's keyframes (relocalizations included)
   std::size_t relocalizations_unconfirmed = 0;  ///< map matches not confirmed by the next keyframes
   bool relocalized = false;
   TimeNs first_relocalization_t_ns = 0;  ///< the keyframe that confirmed the first relocalization
@@ -73,7 +73,8 @@ struct LoopStats {
 /// odometry since the graph last fixed it: LoopOptions::max_loop_shift_m + max_loop_shift_per_m
 /// * path_m in position, max_loop_yaw_rad + max_loop_yaw_per_m * path_m in yaw.
 bool loopWithinDrift(const Eigen::Vector3d& p_old, const Eigen::Quaterniond& q_old, const Eigen::Vector3d& p_now,
-                     const Eigen::Quaterniond& q_now, const RelativePose4& rel, double path_m, const LoopOptions& options);
+                     const Eigen::Quaterniond& q_now, const RelativePose4& rel, double path_m,
+                     const LoopOptions& options);
 
 class LoopCloser {
  public:
@@ -140,8 +141,8 @@ class LoopCloser {
   PoseGraph graph_;
   std::vector<LoopEvent> loops_;
   LoopStats stats_;
-  std::size_t loaded_ = 0;  ///< keyframes from a loaded map (database ids below it)
-  bool unsolved_loops_ = false;     ///< loop edges added since the last solve
+  std::size_t loaded_ = 0;       ///< keyframes from a loaded map (database ids below it)
+  bool unsolved_loops_ = false;  ///< loop edges added since the last solve
   std::uint32_t last_solve_node_ = 0;
   bool extend_ = true;
   bool added_ = false;

@@ -48,8 +48,14 @@ class Reader {
     pos_ += sizeof(T);
     return v;
   }
-  Eigen::Vector3d vec3() { const double x = get<double>(), y = get<double>(); return {x, y, get<double>()}; }
-  Eigen::Vector2d vec2() { const double x = get<double>(); return {x, get<double>()}; }
+  Eigen::Vector3d vec3() {
+    const double x = get<double>(), y = get<double>();
+    return {x, y, get<double>()};
+  }
+  Eigen::Vector2d vec2() {
+    const double x = get<double>();
+    return {x, get<double>()};
+  }
   Eigen::Quaterniond quat() {
     const double w = get<double>(), x = get<double>(), y = get<double>(), z = get<double>();
     return Eigen::Quaterniond(w, x, y, z);
@@ -64,7 +70,8 @@ class Reader {
   /// A count of items of at least `item_bytes` each that must fit in what is left.
   std::uint32_t count(std::size_t item_bytes) {
     const auto n = get<std::uint32_t>();
-    if (static_cast<std::uint64_t>(n) * item_bytes > bytes_.size() - pos_) fail("count " + std::to_string(n) + " does not fit");
+    if (static_cast<std::uint64_t>(n) * item_bytes > bytes_.size() - pos_)
+      fail("count " + std::to_string(n) + " does not fit");
     return n;
   }
   bool atEnd() const { return pos_ == bytes_.size(); }
@@ -176,7 +183,8 @@ std::vector<LoopEdge> readLoops(const std::string& path, std::uint32_t nodes) {
 }  // namespace
 
 void saveMap(const std::string& dir, const SavedMap& map) {
-  if (map.keyframes.size() != map.nodes.size()) throw std::invalid_argument("saveMap: one pose-graph node per keyframe");
+  if (map.keyframes.size() != map.nodes.size())
+    throw std::invalid_argument("saveMap: one pose-graph node per keyframe");
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw InputError(dir, "cannot create map folder: " + ec.message());
@@ -195,9 +203,12 @@ void saveMap(const std::string& dir, const SavedMap& map) {
   for (const LoopEdge& l : map.loops)
     loops << l.from << ',' << l.to << ',' << l.measured.t_from_to.x() << ',' << l.measured.t_from_to.y() << ','
           << l.measured.t_from_to.z() << ',' << l.measured.dyaw << '\n';
-  const nlohmann::json header = {{"format", kFormat},         {"version", kMapFormatVersion},
-                                 {"keyframes", map.keyframes.size()}, {"landmarks", landmarks},
-                                 {"loops", map.loops.size()}, {"descriptor_bits", 256},
+  const nlohmann::json header = {{"format", kFormat},
+                                 {"version", kMapFormatVersion},
+                                 {"keyframes", map.keyframes.size()},
+                                 {"landmarks", landmarks},
+                                 {"loops", map.loops.size()},
+                                 {"descriptor_bits", 256},
                                  {"keyframes_fnv1a64", std::to_string(fnv1a64(w.bytes()))},
                                  {"rig", map.rig}};
   writeAtomically(fs::path(dir) / "keyframes.bin", w.bytes());

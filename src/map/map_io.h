@@ -18,8 +18,8 @@ constexpr int kMapFormatVersion = 1;
 
 /// What a saved map holds.
 struct SavedMap {
-  std::vector<Keyframe> keyframes;     ///< in database order (id = index)
-  std::vector<PoseGraphNode> nodes;    ///< one per keyframe, same order
+  std::vector<Keyframe> keyframes;   ///< in database order (id = index)
+  std::vector<PoseGraphNode> nodes;  ///< one per keyframe, same order
   std::vector<LoopEdge> loops;
   /// The left camera the map was built with (pipeline::rigFingerprint; empty: not recorded).
   std::string rig;

@@ -1,13 +1,12 @@
 #include "map/place_verifier.h"
 
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core/eigen.hpp>
-#include <opencv2/features2d.hpp>
-
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <cmath>
 #include <limits>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/features2d.hpp>
 
 namespace idyvins::map {
 
@@ -35,7 +34,8 @@ std::vector<Descriptor> describeCorners(const cv::Mat& gray, std::vector<cv::Poi
 
 std::vector<cv::Point2f> recognitionCorners(const cv::Mat& gray, int count) {
   std::vector<cv::KeyPoint> keypoints;
-  cv::ORB::create(count, 1.2f, /*nlevels=*/1)->detect(gray, keypoints);  // one scale: revisits are seen at similar distances
+  cv::ORB::create(count, 1.2f, /*nlevels=*/1)
+      ->detect(gray, keypoints);  // one scale: revisits are seen at similar distances
   std::vector<cv::Point2f> out;
   for (const auto& k : keypoints) out.push_back(k.pt);
   return out;
@@ -49,8 +49,10 @@ std::vector<int> matchLandmarks(const Keyframe& candidate, const PlaceQuery& que
     int best = std::numeric_limits<int>::max(), second = best, best_l = -1;
     for (std::size_t l = 0; l < candidate.landmarks.size(); ++l) {
       const int d = hamming(query.descriptors[q], candidate.landmarks[l].descriptor);
-      if (d < best) second = best, best = d, best_l = static_cast<int>(l);
-      else if (d < second) second = d;
+      if (d < best)
+        second = best, best = d, best_l = static_cast<int>(l);
+      else if (d < second)
+        second = d;
     }
     if (best <= o.max_hamming && best < o.ratio * second) match[q] = best_l;
   }
@@ -79,8 +81,10 @@ double positionSigma(const std::vector<Eigen::Vector3d>& landmarks_w, const Eige
     const double d = ray.norm();
     const Eigen::Vector3d r = ray / std::max(d, 1e-9);
     const double sd = d * d * s / baseline_m, sl = d * s;
-    const Eigen::Matrix3d cov_w = sd * sd * r * r.transpose() + sl * sl * (Eigen::Matrix3d::Identity() - r * r.transpose());
-    const Eigen::Matrix2d cov_uv = s * s * Eigen::Matrix2d::Identity() + J_proj * R * cov_w * R.transpose() * J_proj.transpose();
+    const Eigen::Matrix3d cov_w =
+        sd * sd * r * r.transpose() + sl * sl * (Eigen::Matrix3d::Identity() - r * r.transpose());
+    const Eigen::Matrix2d cov_uv =
+        s * s * Eigen::Matrix2d::Identity() + J_proj * R * cov_w * R.transpose() * J_proj.transpose();
     info += J.transpose() * cov_uv.inverse() * J;
   }
   Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(info);
@@ -137,8 +141,8 @@ PlaceVerification verifyPlace(const Keyframe& candidate, const PlaceQuery& query
   const Eigen::Isometry3d T_w_b = T_w_c * T_b_c.inverse();
   const Eigen::Isometry3d T_w_c_old =
       Eigen::Translation3d(candidate.p_w_b) * candidate.q_w_b * T_b_c;  // where the landmarks were seen from
-  v.sigma_position_m = positionSigma(landmarks_in, T_w_c.inverse(), T_w_c_old.translation(), o.focal_px,
-                                     o.stereo_baseline_m, 1.0);
+  v.sigma_position_m =
+      positionSigma(landmarks_in, T_w_c.inverse(), T_w_c_old.translation(), o.focal_px, o.stereo_baseline_m, 1.0);
   if (v.sigma_position_m > o.max_sigma_position_m) return v;
   v.accepted = true;
   v.p_w_b = T_w_b.translation();

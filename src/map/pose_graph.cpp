@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/so3.h"
+#include "map/four_dof_edge.h"
 
 namespace idyvins::map {
 
@@ -117,8 +118,6 @@ void PoseGraph::relocalize(double yaw, const Eigen::Vector3d& t) {
   if (session_start_ < nodes_.size()) nodes_[session_start_].fixed = false;
 }
 
-void PoseGraph::setFixed(std::size_t node, bool fixed) { nodes_.at(node).fixed = fixed; }
-
 PoseGraphSolve PoseGraph::optimize() {
   PoseGraphSolve out;
   if (nodes_.size() < 2) return out;
@@ -127,21 +126,22 @@ PoseGraphSolve PoseGraph::optimize() {
   for (std::size_t j = 1; j < nodes_.size(); ++j) {
     // Odometry edges within a session only; the loaded map's nodes are fixed (no edges among them).
     if (j < session_start_) continue;
-    const std::size_t first = j == session_start_ ? j : std::max(session_start_, j > static_cast<std::size_t>(k) ? j - k : 0);
+    const std::size_t first =
+        j == session_start_ ? j : std::max(session_start_, j > static_cast<std::size_t>(k) ? j - k : 0);
     for (std::size_t i = first; i < j; ++i) {
       const PoseGraphNode &a = nodes_[i], &b = nodes_[j];
-      problem.AddResidualBlock(new FourDofEdgeCost(relativePose4(a.p_odom, a.q_odom, b.p_odom, b.q_odom),
-                                                   tiltOf(a.q_odom), options_.odometry_sigma_t,
-                                                   options_.odometry_sigma_yaw),
-                               nullptr, nodes_[i].p.data(), &nodes_[i].yaw, nodes_[j].p.data(), &nodes_[j].yaw);
+      problem.AddResidualBlock(
+          new FourDofEdgeCost(relativePose4(a.p_odom, a.q_odom, b.p_odom, b.q_odom), tiltOf(a.q_odom),
+                              options_.odometry_sigma_t, options_.odometry_sigma_yaw),
+          nullptr, nodes_[i].p.data(), &nodes_[i].yaw, nodes_[j].p.data(), &nodes_[j].yaw);
     }
   }
   for (const LoopEdge& l : loops_) {
     if (nodes_[l.from].fixed && nodes_[l.to].fixed) continue;  // the loaded map's own loops
     problem.AddResidualBlock(
         new FourDofEdgeCost(l.measured, tiltOf(nodes_[l.from].q_odom), options_.loop_sigma_t, options_.loop_sigma_yaw),
-        new ceres::HuberLoss(options_.loop_huber), nodes_[l.from].p.data(), &nodes_[l.from].yaw,
-        nodes_[l.to].p.data(), &nodes_[l.to].yaw);
+        new ceres::HuberLoss(options_.loop_huber), nodes_[l.from].p.data(), &nodes_[l.from].yaw, nodes_[l.to].p.data(),
+        &nodes_[l.to].yaw);
   }
   for (PoseGraphNode& n : nodes_) {
     if (!n.fixed || !problem.HasParameterBlock(n.p.data())) continue;  // a map node no edge reaches
@@ -180,7 +180,8 @@ void PoseGraph::correctedAt(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Ei
   q_w_b = q_odom;
   if (nodes_.size() <= session_start_) return;
   const auto begin = nodes_.begin() + static_cast<std::ptrdiff_t>(session_start_);
-  const auto it = std::upper_bound(begin, nodes_.end(), t_ns, [](TimeNs t, const PoseGraphNode& n) { return t < n.t_ns; });
+  const auto it =
+      std::upper_bound(begin, nodes_.end(), t_ns, [](TimeNs t, const PoseGraphNode& n) { return t < n.t_ns; });
   applyCorrection(it == begin ? *begin : *std::prev(it), p_odom, q_odom, p_w_b, q_w_b);
 }
 

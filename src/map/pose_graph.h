@@ -4,8 +4,6 @@
 // edges tie each keyframe to its predecessors, loop edges to the keyframe a place was
 // recognised in; loop edges carry a robust loss so one wrong loop cannot bend the graph.
 
-#include <ceres/sized_cost_function.h>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstddef>
@@ -33,19 +31,6 @@ struct RelativePose4 {
 /// The 4-DoF relative pose between two full poses (roll and pitch of `from` kept in the translation).
 RelativePose4 relativePose4(const Eigen::Vector3d& p_w_from, const Eigen::Quaterniond& q_w_from,
                             const Eigen::Vector3d& p_w_to, const Eigen::Quaterniond& q_w_to);
-
-/// Residual of one edge i -> j, weighted: [ (R_i^T (p_j - p_i) - t_ij) / sigma_t ; wrap(yaw_j - yaw_i - dyaw_ij) / sigma_yaw ]
-/// with R_i = Rz(yaw_i) * tilt_i, tilt_i = Ry(pitch_i) Rx(roll_i) fixed. Parameters: p_i (3), yaw_i (1), p_j (3), yaw_j (1).
-class FourDofEdgeCost final : public ceres::SizedCostFunction<4, 3, 1, 3, 1> {
- public:
-  FourDofEdgeCost(const RelativePose4& measured, const Eigen::Matrix3d& tilt_i, double sigma_t, double sigma_yaw);
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
-
- private:
-  RelativePose4 measured_;
-  Eigen::Matrix3d tilt_i_;
-  double w_t_, w_yaw_;
-};
 
 /// One keyframe in the graph: its odometry pose and its corrected pose.
 struct PoseGraphNode {
@@ -83,7 +68,6 @@ class PoseGraph {
   /// node, which is held fixed: the gauge until the session is tied to a map). Returns its index.
   std::size_t addKeyframe(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom);
   void addLoop(const LoopEdge& loop);
-  void setFixed(std::size_t node, bool fixed);
 
   /// A loaded map: appends its nodes (held fixed) and loop edges before any keyframe of this run,
   /// and starts a new session: the run's keyframes (in their own odometry frame, unrelated to the
@@ -108,8 +92,8 @@ class PoseGraph {
   /// before t_ns (the session's first node's for earlier times): yaw turned by the node's yaw
   /// change, position kept at the same offset from the node (unchanged without nodes). Poses newer
   /// than the newest node get its correction, as new keyframes do.
-  void correctedAt(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom,
-                   Eigen::Vector3d& p_w_b, Eigen::Quaterniond& q_w_b) const;
+  void correctedAt(TimeNs t_ns, const Eigen::Vector3d& p_odom, const Eigen::Quaterniond& q_odom, Eigen::Vector3d& p_w_b,
+                   Eigen::Quaterniond& q_w_b) const;
 
  private:
   PoseGraphOptions options_;

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 
+#include "config/modes.h"
 #include "core/error.h"
-#include "pipeline/modes.h"
 
 namespace idyvins::pipeline {
 
@@ -14,7 +14,7 @@ std::unique_ptr<frontend::FeatureFilter> makeFilter(const Config& c) {
   if (kind == FilterKind::kRansac) return std::make_unique<frontend::RansacFilter>(c.tracker.f_threshold);
   if (kind == FilterKind::kSeg) return std::make_unique<frontend::SegFilter>();
   if (kind != FilterKind::kIdy) return nullptr;
-  return std::make_unique<dynamic::IdyFilter>(optionsFor(c).idy);
+  return std::make_unique<dynamic::IdyFilter>(optionsFor(c).idy, optionsFor(c).eliminate);
 }
 
 FrontEnd::FrontEnd(const Config& config)
@@ -44,8 +44,9 @@ frontend::FeatureFrame FrontEnd::track(const StereoFrame& frame, const frontend:
   frontend::FeatureFrame out = tracker_.track(frame, prior, filter_.get(), masks ? &frame.left_mask : nullptr);
   if (dropout_permille_ > 0) {
     auto& f = out.features;
-    f.erase(std::remove_if(f.begin(), f.end(),
-                           [&](const frontend::Feature& x) { return withheldTrack(x.id, dropout_seed_, dropout_permille_); }),
+    f.erase(std::remove_if(
+                f.begin(), f.end(),
+                [&](const frontend::Feature& x) { return withheldTrack(x.id, dropout_seed_, dropout_permille_); }),
             f.end());
   }
   return out;

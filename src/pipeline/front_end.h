@@ -7,10 +7,10 @@
 #include <memory>
 #include <optional>
 
+#include "config/config.h"
 #include "dynamic/dynamic.h"
 #include "frontend/feature_filter.h"
 #include "frontend/feature_tracker.h"
-#include "io/config.h"
 
 namespace idyvins::pipeline {
 
@@ -41,7 +41,7 @@ class FrontEnd {
   Mode mode_;
   frontend::FeatureTracker tracker_;
   std::unique_ptr<frontend::FeatureFilter> filter_;
-  const dynamic::IdyFilter* idy_ = nullptr;  ///< filter_ when it is the IDY filter
+  const dynamic::IdyFilter* idy_ = nullptr;      ///< filter_ when it is the IDY filter
   int dropout_permille_ = 0, dropout_seed_ = 0;  ///< TrackerParams::track_dropout_*
 };
 

@@ -90,10 +90,12 @@ void ObservationRecorder::writeCsv(const std::string& path, const Result& result
   for (const auto& o : observations_) {
     f << o.t_ns << ',' << o.id << ',' << o.u << ',' << o.v << ',' << o.track_length << ','
       << kLabels[static_cast<int>(o.label)] << ',' << o.d_s << ',' << o.credibility << ',' << o.stereo_chi2 << ','
-      << (has_masks_ ? (o.on_moving ? "1" : "0") : "") << ',' << confirmed.count(o.id) << ','
-      << in_static.count(o.id) << ',' << outlier_ids_.count(o.id) << ',' << o.stereo_depth << ',';
-    if (o.u_right >= 0) f << o.u_right << ',' << o.v_right;
-    else f << ',';
+      << (has_masks_ ? (o.on_moving ? "1" : "0") : "") << ',' << confirmed.count(o.id) << ',' << in_static.count(o.id)
+      << ',' << outlier_ids_.count(o.id) << ',' << o.stereo_depth << ',';
+    if (o.u_right >= 0)
+      f << o.u_right << ',' << o.v_right;
+    else
+      f << ',';
     f << '\n';
   }
   if (!f) throw InputError(path, "write failed");
@@ -153,22 +155,22 @@ nlohmann::json StatsRecorder::frameJson(const FrameOutput& out) {
            {"cleared", r.cleared}};
   }
   return {{"t_ns", r.t_ns},
-                     {"dynamic", dyn},
-                     {"tracking_ms", ff.tracking_ms},
-                     {"filter_ms", ff.filter_ms},
-                     {"optimization_ms", r.optimization_ms},
-                     {"marginalization_ms", r.marginalization_ms},
-                     {"solve_iterations", r.solve.iterations},
-                     {"features", ff.features.size()},
-                     {"removed", ff.removed.size()},
-                     {"lost_tracks", toJson(ff.lost_tracks)},
-                     {"lost_new", toJson(ff.lost_new)},
-                     {"landmarks", r.landmarks},
-                     {"right_outliers", r.right_outliers},
-                     {"keyframe", r.keyframe},
-                     {"initialized", r.initialized},
-                     {"td_s", r.td_s},
-                     {"status", r.status}};
+          {"dynamic", dyn},
+          {"tracking_ms", ff.tracking_ms},
+          {"filter_ms", ff.filter_ms},
+          {"optimization_ms", r.optimization_ms},
+          {"marginalization_ms", r.marginalization_ms},
+          {"solve_iterations", r.solve.iterations},
+          {"features", ff.features.size()},
+          {"removed", ff.removed.size()},
+          {"lost_tracks", toJson(ff.lost_tracks)},
+          {"lost_new", toJson(ff.lost_new)},
+          {"landmarks", r.landmarks},
+          {"right_outliers", r.right_outliers},
+          {"keyframe", r.keyframe},
+          {"initialized", r.initialized},
+          {"td_s", r.td_s},
+          {"status", r.status}};
 }
 
 bool isTimingField(const std::string& key) {

@@ -81,8 +81,8 @@ void writeLoopsCsv(const std::string& path, const std::vector<map::LoopEvent>& l
   char line[288];
   for (const auto& l : loops) {
     std::snprintf(line, sizeof(line), "%lld,%lld,%u,%u,%d,%d,%d,%.6f,%.6f,%.6f,%.6f,%d,%.4f\n",
-                  static_cast<long long>(l.old_t_ns), static_cast<long long>(l.new_t_ns), l.old_keyframe, l.new_keyframe,
-                  l.votes, l.matches, l.inliers, l.relative.t_from_to.x(), l.relative.t_from_to.y(),
+                  static_cast<long long>(l.old_t_ns), static_cast<long long>(l.new_t_ns), l.old_keyframe,
+                  l.new_keyframe, l.votes, l.matches, l.inliers, l.relative.t_from_to.x(), l.relative.t_from_to.y(),
                   l.relative.t_from_to.z(), l.relative.dyaw, l.to_map ? 1 : 0, l.sigma_position_m);
     f << line;
   }
@@ -144,7 +144,8 @@ void writeResultFiles(const std::string& out, const Result& r) {
 }
 
 nlohmann::json toJson(const frontend::TrackLosses& l) {
-  return {{"klt", l.klt}, {"border", l.border}, {"backward", l.backward}, {"alignment", l.alignment}, {"pruned", l.pruned}};
+  return {
+      {"klt", l.klt}, {"border", l.border}, {"backward", l.backward}, {"alignment", l.alignment}, {"pruned", l.pruned}};
 }
 
 nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
@@ -157,39 +158,38 @@ nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
                       {"why", e.why},
                       {"resumed_t_ns", e.resumed_t_ns},
                       {"continued_by", e.continued_by}});
-  return {{"frames", s.frames},
-          {"mode", toString(mode)},
-          {"sequence_s", seq_s},
-          {"wall_s", wall_s},
-          {"realtime_factor", seq_s / wall_s},
-          {"mean_tracking_ms", s.sum_tracking_ms / n},
-          {"mean_filter_ms", s.sum_filter_ms / n},
-          {"mean_optimization_ms", s.sum_optimization_ms / n},
-          {"mean_marginalization_ms", s.sum_marginalization_ms / n},
-          {"solve_profile", solveProfileJson(s)},
-          {"poses", r.trajectory.size()},
-          {"pose_share", n > 0 ? static_cast<double>(r.trajectory.size()) / n : 0.0},
-          {"init_failures", s.init_failures},
-          {"first_t_ns", s.first_t_ns},
-          {"initialized_at_s", s.init_t_ns >= 0 ? toSeconds(s.init_t_ns - s.first_t_ns) : -1.0},
-          {"frames_without_prior", s.frames_without_prior},
-          {"frames_beyond_imu", s.frames_beyond_imu},
-          {"imu_samples_dropped",
-           {{"out_of_range", s.imu_out_of_range},
-            {"out_of_order", s.imu_out_of_order},
-            {"spikes", s.imu_spike_samples}}},
-          {"imu_spikes", s.imu_spikes},
-          {"td_s", s.td_s},
-          {"td_estimated", s.td_estimated},
-          {"lost_new_corners_tested", s.lost_tested},
-          {"lost_new_corners_moving", s.lost_moving},
-          {"lost_tracks", toJson(s.lost_tracks)},
-          {"lost_new", toJson(s.lost_new)},
-          {"map_static_points", r.static_map.size()},
-          {"map_dynamic_points", r.dynamic_map.size()},
-          {"classification", nullptr},
-          {"resets", resets},
-          {"loop_closure", r.loop_enabled ? loopJson(r) : nlohmann::json()}};
+  return {
+      {"frames", s.frames},
+      {"mode", toString(mode)},
+      {"sequence_s", seq_s},
+      {"wall_s", wall_s},
+      {"realtime_factor", seq_s / wall_s},
+      {"mean_tracking_ms", s.sum_tracking_ms / n},
+      {"mean_filter_ms", s.sum_filter_ms / n},
+      {"mean_optimization_ms", s.sum_optimization_ms / n},
+      {"mean_marginalization_ms", s.sum_marginalization_ms / n},
+      {"solve_profile", solveProfileJson(s)},
+      {"poses", r.trajectory.size()},
+      {"pose_share", n > 0 ? static_cast<double>(r.trajectory.size()) / n : 0.0},
+      {"init_failures", s.init_failures},
+      {"first_t_ns", s.first_t_ns},
+      {"initialized_at_s", s.init_t_ns >= 0 ? toSeconds(s.init_t_ns - s.first_t_ns) : -1.0},
+      {"frames_without_prior", s.frames_without_prior},
+      {"frames_beyond_imu", s.frames_beyond_imu},
+      {"imu_samples_dropped",
+       {{"out_of_range", s.imu_out_of_range}, {"out_of_order", s.imu_out_of_order}, {"spikes", s.imu_spike_samples}}},
+      {"imu_spikes", s.imu_spikes},
+      {"td_s", s.td_s},
+      {"td_estimated", s.td_estimated},
+      {"lost_new_corners_tested", s.lost_tested},
+      {"lost_new_corners_moving", s.lost_moving},
+      {"lost_tracks", toJson(s.lost_tracks)},
+      {"lost_new", toJson(s.lost_new)},
+      {"map_static_points", r.static_map.size()},
+      {"map_dynamic_points", r.dynamic_map.size()},
+      {"classification", nullptr},
+      {"resets", resets},
+      {"loop_closure", r.loop_enabled ? loopJson(r) : nlohmann::json()}};
 }
 
 namespace {
@@ -214,9 +214,10 @@ io::OutputFolderOptions runFolderOptions(std::vector<std::string> inputs, bool f
   o.tool = "run";
   o.inputs = std::move(inputs);
   o.force = force;
-  o.legacy_names = {"trajectory.tum", "trajectory.csv", "state.csv", "stats.json", "stats.json.part", "resets.csv",
-                    "map_static.ply", "map_dynamic.ply", "map_all.ply", "run.json", "groundtruth.tum",
-                    "trajectory_loop.tum", "loops.csv", "map_static_loop.ply", "map_static_on_moving.ply"};
+  o.legacy_names = {
+      "trajectory.tum",  "trajectory.csv",      "state.csv",       "stats.json",          "stats.json.part",
+      "resets.csv",      "map_static.ply",      "map_dynamic.ply", "map_all.ply",         "run.json",
+      "groundtruth.tum", "trajectory_loop.tum", "loops.csv",       "map_static_loop.ply", "map_static_on_moving.ply"};
   o.legacy_names.insert(o.legacy_names.end(), extra_names.begin(), extra_names.end());
   o.legacy_required = {"run.json", "stats.json"};
   return o;
@@ -248,10 +249,12 @@ std::string whyNoTrajectory(const Result& r) {
   if (poses == 0 && s.frames <= static_cast<std::size_t>(backend::kWindowSize))
     return why + "the run ended after " + std::to_string(s.frames) + " frame(s); initialization needs " +
            std::to_string(backend::kWindowSize + 1) + " frames";
-  if (!s.resets.empty()) return why + "reset at frame " + std::to_string(s.resets.back().frame) + ": " + s.resets.back().why;
+  if (!s.resets.empty())
+    return why + "reset at frame " + std::to_string(s.resets.back().frame) + ": " + s.resets.back().why;
   if (s.init_t_ns >= 0) {
     char at[96];
-    std::snprintf(at, sizeof(at), "initialized only %.2f s after the first frame", toSeconds(s.init_t_ns - s.first_t_ns));
+    std::snprintf(at, sizeof(at), "initialized only %.2f s after the first frame",
+                  toSeconds(s.init_t_ns - s.first_t_ns));
     return why + at + " (an IMU starting late? no motion at the start?)";
   }
   return why + "last status: " + s.last_status;
@@ -289,8 +292,9 @@ void addAte(nlohmann::json& summary, const std::vector<StampedPose>& gt, const R
   for (const auto& seg : segments(r)) {
     nlohmann::json j = {{"from_t_ns", seg.front().t_ns}, {"to_t_ns", seg.back().t_ns}, {"poses", seg.size()}};
     try {
-      j["ate_rmse_m"] = seg.size() > 2 ? nlohmann::json(eval::computeAte(gt, seg, eval::AlignMode::kSe3, 10'000'000).stats.rmse)
-                                       : nlohmann::json();
+      j["ate_rmse_m"] = seg.size() > 2
+                            ? nlohmann::json(eval::computeAte(gt, seg, eval::AlignMode::kSe3, 10'000'000).stats.rmse)
+                            : nlohmann::json();
     } catch (const std::exception&) {
       j["ate_rmse_m"] = nullptr;
     }
@@ -298,6 +302,5 @@ void addAte(nlohmann::json& summary, const std::vector<StampedPose>& gt, const R
   }
   summary["segments"] = per;
 }
-
 
 }  // namespace idyvins::pipeline

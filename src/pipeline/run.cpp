@@ -1,9 +1,9 @@
 #include "pipeline/run.h"
 
+#include "config/modes.h"
 #include "core/checksum.h"
 #include "core/error.h"
 #include "io/prefetch.h"
-#include "pipeline/modes.h"
 
 namespace idyvins::pipeline {
 
@@ -45,8 +45,8 @@ RunOptions applyRunRequest(const RunRequest& r, Config& config) {
   if (!r.mode.empty() && !parseMode(r.mode, config.mode))
     throw OptionError("mode", "must be one of " + modeNames() + ", got '" + r.mode + "'");
   if (traitsOf(config.mode).needs_masks && !r.masks_available)
-    throw OptionError("mode", std::string(toString(config.mode)) +
-                                  " needs ground-truth masks, which a live source does not have");
+    throw OptionError(
+        "mode", std::string(toString(config.mode)) + " needs ground-truth masks, which a live source does not have");
   if (r.solver_time_limit) config.estimator.time_limited = true;
   if (r.save_map || r.load_map) config.loop.enabled = true;  // the map is the loop closer's database
   RunOptions run;
@@ -66,7 +66,7 @@ io::DatasetRequest datasetRequest(const Config& config, const std::string& groun
   r.topics.segmentation = config.segmentation_topic;
   r.image_width = config.image_width;
   r.image_height = config.image_height;
-  r.rig = {config.num_cam, config.use_imu, config.imu.g_norm};
+  r.rig = {config.num_cam, config.use_imu, config.imu.noise.g_norm};
   r.masks = masks;
   r.segmentation_rgb_ids = config.segmentation_rgb_ids;
   r.segmentation_vehicle_ids = config.segmentation_vehicle_ids;
@@ -78,8 +78,8 @@ io::OpenedDataset openDataset(const std::string& path, const Config& config, con
   io::OpenedDataset in = io::openDataset(path, datasetRequest(config, groundtruth_topic, masks));
   if (traitsOf(config.mode).needs_masks && !in.has_masks)
     throw InputError(in.root, in.is_bag ? "mode seg needs ground-truth masks: a segmentation_topic in the config "
-                                       "(VIODE: /cam0/segmentation)"
-                                     : "mode seg needs mav0/cam0/mask/ (ground-truth masks)");
+                                          "(VIODE: /cam0/segmentation)"
+                                        : "mode seg needs mav0/cam0/mask/ (ground-truth masks)");
   return in;
 }
 

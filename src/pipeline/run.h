@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "io/config.h"
+#include "config/config.h"
 #include "io/open_dataset.h"
 #include "pipeline/system.h"
 
@@ -50,14 +50,13 @@ RunOptions applyRunRequest(const RunRequest& request, Config& config);
 
 /// What opening a dataset for `config` reads: its topics (image1 only with two cameras;
 /// `groundtruth_topic`, when not empty, overrides the config's), image size, rig, colour tables.
-io::DatasetRequest datasetRequest(const Config& config, const std::string& groundtruth_topic = "",
-                                  bool masks = true);
+io::DatasetRequest datasetRequest(const Config& config, const std::string& groundtruth_topic = "", bool masks = true);
 
 /// Opens `path` (a EuRoC folder or a ROS1 bag) for `config` (io::openDataset with
 /// datasetRequest); masks are read when it has them and `masks` is true. Throws InputError for
 /// what the readers refuse, and when config.mode needs masks the dataset does not have.
-io::OpenedDataset openDataset(const std::string& path, const Config& config,
-                              const std::string& groundtruth_topic = "", bool masks = true);
+io::OpenedDataset openDataset(const std::string& path, const Config& config, const std::string& groundtruth_topic = "",
+                              bool masks = true);
 
 /// FNV-1a 64 (hex) of a config file and its camera files, in that order: stats.json's
 /// config_fnv1a64, and what bench --plan / --collect compare. Throws InputError.

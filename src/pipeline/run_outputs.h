@@ -21,8 +21,8 @@ struct RunOutputsOptions {
   bool force = false;                    ///< write into a folder holding files idyvins did not write (none removed)
   std::vector<std::string> extra_names;  ///< files the embedder writes beside the run's (the node's latency.csv)
   bool masks = false;                    ///< ground-truth masks: classification and map_static_on_moving.ply
-  std::string dump_observations;  ///< where the observation CSV goes ("": none; io::OutputFolder::extraFile)
-  std::string save_map;           ///< where the map is saved ("": none; io::OutputFolder::extraFolder)
+  std::string dump_observations;         ///< where the observation CSV goes ("": none; io::OutputFolder::extraFile)
+  std::string save_map;                  ///< where the map is saved ("": none; io::OutputFolder::extraFolder)
 };
 
 /// How a run was made, for run.json (what `idyvins report` shows).
@@ -33,10 +33,10 @@ struct RunRecord {
 
 /// What the finished run is written with beside its result.
 struct RunEnd {
-  double wall_s = 0;                         ///< wall-clock seconds of the run (0: not measured)
+  double wall_s = 0;                                 ///< wall-clock seconds of the run (0: not measured)
   nlohmann::json extras = nlohmann::json::object();  ///< keys the embedder adds to the summary
-  std::vector<StampedPose> groundtruth;      ///< reference poses: ATE in the summary, groundtruth.tum
-  const RunRecord* record = nullptr;         ///< run.json (not written without)
+  std::vector<StampedPose> groundtruth;              ///< reference poses: ATE in the summary, groundtruth.tum
+  const RunRecord* record = nullptr;                 ///< run.json (not written without)
 };
 
 /// The output folder of one run and every file it writes. Construct before the run (the

@@ -1,17 +1,19 @@
 #include "pipeline/system.h"
 
+#include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <functional>
 #include <mutex>
-#include <cmath>
 #include <stdexcept>
 #include <thread>
 #include <utility>
 
+#include "backend/estimator.h"
+#include "config/modes.h"
 #include "core/error.h"
-#include "pipeline/modes.h"
 #include "imu/preintegration.h"
+#include "pipeline/front_end.h"
 
 namespace idyvins::pipeline {
 
@@ -96,13 +98,19 @@ class System::Worker {
   std::thread thread_;
 };
 
+struct System::Parts {
+  explicit Parts(const Config& config)
+      : front_end(config), estimator(config.rig(), config.imu.noise, optionsFor(config).estimator) {}
+  FrontEnd front_end;
+  backend::Estimator estimator;
+};
+
 System::System(const Config& config, const RunOptions& run)
     : config_(checkedConfig(config)),
       mode_(config.mode),
       run_(run),
-      front_end_(config_),
-      estimator_(config_.rig(), config_.imu, optionsFor(config_).estimator),
-      spike_gate_(config_.imu_spike) {
+      parts_(std::make_unique<Parts>(config_)),
+      spike_gate_(config_.imu.spike) {
   if (run_.feedback_delay != 0 && run_.feedback_delay != 1)
     throw std::invalid_argument("RunOptions::feedback_delay must be 0 or 1");
   if (run_.pipelined && run_.feedback_delay != 1)
@@ -125,9 +133,10 @@ std::string rigFingerprint(const Config& config) {
   const Eigen::Isometry3d& T = config.T_b_c.at(0);
   const Eigen::Quaterniond q(T.rotation());
   char text[320];
-  std::snprintf(text, sizeof(text), "%s %dx%d f %.2f %.2f c %.2f %.2f d %.4f %.4f %.4f %.4f T_b_c0 %.3f %.3f %.3f q %.4f %.4f %.4f %.4f",
-                camera::toString(c.type), c.width, c.height, c.fx, c.fy, c.cx, c.cy, c.dist[0], c.dist[1], c.dist[2], c.dist[3],
-                T.translation().x(), T.translation().y(), T.translation().z(), q.w(), q.x(), q.y(), q.z());
+  std::snprintf(text, sizeof(text),
+                "%s %dx%d f %.2f %.2f c %.2f %.2f d %.4f %.4f %.4f %.4f T_b_c0 %.3f %.3f %.3f q %.4f %.4f %.4f %.4f",
+                camera::toString(c.type), c.width, c.height, c.fx, c.fy, c.cx, c.cy, c.dist[0], c.dist[1], c.dist[2],
+                c.dist[3], T.translation().x(), T.translation().y(), T.translation().z(), q.w(), q.x(), q.y(), q.z());
   return text;
 }
 
@@ -144,8 +153,8 @@ void System::addImu(const ImuSample& sample) {
     ++summary_.imu_out_of_order;
     return;
   }
-  if (!sample.acc_b.allFinite() || !sample.gyr_b.allFinite() || sample.acc_b.norm() > config_.imu_max_acc_mps2 ||
-      sample.gyr_b.norm() > config_.imu_max_gyr_radps) {
+  if (!sample.acc_b.allFinite() || !sample.gyr_b.allFinite() || sample.acc_b.norm() > config_.imu.max_acc_mps2 ||
+      sample.gyr_b.norm() > config_.imu.max_gyr_radps) {
     ++summary_.imu_out_of_range;
     return;
   }
@@ -164,10 +173,10 @@ frontend::MotionPrior System::priorFor(TimeNs t_prev, TimeNs t_cur) const {
   // it to the previous frame's time with the IMU and its own biases.
   if (run_.feedback_delay == 1 && t_prev > t_from) {
     if (imu_.empty() || imu_.front().t_ns > t_from || imu_.back().t_ns < t_prev) return {};
-    from = imu::integrateBetween(imu_, t_from, t_prev, from.ba, from.bg, config_.imu).predict(from);
+    from = imu::integrateBetween(imu_, t_from, t_prev, from.ba, from.bg, config_.imu.noise).predict(from);
     t_from = t_prev;
   }
-  return dynamic::motionPrior(from, t_from, t_cur, imu_, config_.imu, config_.T_b_c[0]);
+  return dynamic::motionPrior(from, t_from, t_cur, imu_, config_.imu.noise, config_.T_b_c[0]);
 }
 
 const FrameOutput* System::addFrame(const StereoFrame& frame) {
@@ -212,9 +221,9 @@ void System::process(const StereoFrame& frame) {
   FrameOutput& out = f->out;
   out.index = summary_.frames + (in_flight_ ? 1 : 0);
   out.t_ns = t;
-  out.features = front_end_.track(on_imu_clock, priorFor(last_frame_t_ns_, t));
+  out.features = parts_->front_end.track(on_imu_clock, priorFor(last_frame_t_ns_, t));
   out.features.td_s = td_s_;
-  out.idy = front_end_.idyStats();
+  out.idy = parts_->front_end.idyStats();
   last_frame_t_ns_ = t;
   // The estimator gets the IMU samples up to this frame's time, and the first one at or after
   // it (a frame between two samples is reached by interpolation), with the frame's back end.
@@ -231,10 +240,10 @@ void System::process(const StereoFrame& frame) {
 }
 
 void System::backEnd(InFlight& f) {
-  for (const ImuSample& s : f.imu) estimator_.addImu(s);
-  const std::size_t static_before = estimator_.staticMap().size();
-  f.out.estimate = estimator_.addFrame(f.out.features);
-  const auto& static_map = estimator_.staticMap();
+  for (const ImuSample& s : f.imu) parts_->estimator.addImu(s);
+  const std::size_t static_before = parts_->estimator.staticMap().size();
+  f.out.estimate = parts_->estimator.addFrame(f.out.features);
+  const auto& static_map = parts_->estimator.staticMap();
   if (static_map.size() > static_before)
     f.out.new_static_points.assign(static_map.begin() + static_cast<std::ptrdiff_t>(static_before), static_map.end());
   mapEliminated(f.out.features, f.out);
@@ -251,9 +260,9 @@ void System::completeInFlight() {
 }
 
 void System::finalize(InFlight& f) {
-  if (f.out.estimate.reset) front_end_.reset();
-  snapshot_ = estimator_.latest();
-  td_s_ = estimator_.timeOffset();
+  if (f.out.estimate.reset) parts_->front_end.reset();
+  snapshot_ = parts_->estimator.latest();
+  td_s_ = parts_->estimator.timeOffset();
   // The next priors start at the newest state (or, before there is one, at a frame not
   // older than this one): drop the samples before the last one at or before that time.
   const TimeNs from = snapshot_.valid ? std::min(snapshot_.t_ns, f.out.t_ns) : f.out.t_ns;
@@ -300,7 +309,8 @@ void System::finishLoops(Result& result) {
   }
   result.loops = loop_->loops();
   result.loop_stats = loop_->stats();
-  for (const auto& [id, p_w] : loop_->correctedLandmarks()) result.loop_static_map.push_back({p_w, FeatureLabel::kStatic, id});
+  for (const auto& [id, p_w] : loop_->correctedLandmarks())
+    result.loop_static_map.push_back({p_w, FeatureLabel::kStatic, id});
 }
 
 void System::mapLostMoving(const frontend::FeatureFrame& ff, FrameOutput& out) {
@@ -320,8 +330,8 @@ void System::mapEliminated(const frontend::FeatureFrame& ff, FrameOutput& out) {
   Eigen::Isometry3d T_w_b = Eigen::Isometry3d::Identity();
   T_w_b.linear() = out.estimate.state.q_w_b.toRotationMatrix();
   T_w_b.translation() = out.estimate.state.p_w_b;
-  const Eigen::Isometry3d T_w_c0 = backend::cameraPose(T_w_b, estimator_.rig().T_b_c0);
-  const Eigen::Isometry3d T_w_c1 = backend::cameraPose(T_w_b, estimator_.rig().T_b_c1);
+  const Eigen::Isometry3d T_w_c0 = backend::cameraPose(T_w_b, parts_->estimator.rig().T_b_c0);
+  const Eigen::Isometry3d T_w_c1 = backend::cameraPose(T_w_b, parts_->estimator.rig().T_b_c1);
   prev_T_w_c_.emplace(T_w_c0, T_w_c1);
   for (const auto& f : ff.removed)  // eliminated features with a stereo match: dynamic map
     if (f.has_right)
@@ -376,9 +386,9 @@ Result System::finish() {
   completeInFlight();
   summary_.td_s = td_s_;
   summary_.td_estimated = config_.estimator.estimate_td;
-  estimator_.flushMap();
+  parts_->estimator.flushMap();
   Result result;
-  result.static_map = estimator_.staticMap();
+  result.static_map = parts_->estimator.staticMap();
   result.dynamic_map = eliminated_;  // the one dynamic map: eliminated points, then confirmed ones
   result.dynamic_map.insert(result.dynamic_map.end(), confirmed_.begin(), confirmed_.end());
   result.trajectory = trajectory_;

@@ -19,23 +19,22 @@
 #include <string>
 #include <vector>
 
-#include "backend/estimator.h"
+#include "backend/frame_result.h"
+#include "config/config.h"
 #include "core/measurements.h"
 #include "dynamic/dynamic.h"
 #include "frontend/feature_frame.h"
 #include "imu/spike_gate.h"
-#include "io/config.h"
 #include "map/loop_closer.h"
-#include "pipeline/front_end.h"
 
 namespace idyvins::pipeline {
 
 /// Everything the system says about one stereo frame.
 struct FrameOutput {
-  std::size_t index = 0;            ///< 0-based count of frames given to the system
-  TimeNs t_ns = 0;                  ///< the frame's time stamp
-  frontend::FeatureFrame features;  ///< labelled features, removed / lost-moving ones, tracking and filter ms
-  backend::FrameResult estimate;    ///< initialized, body state, reset and status, solve and marginalization ms
+  std::size_t index = 0;                   ///< 0-based count of frames given to the system
+  TimeNs t_ns = 0;                         ///< the frame's time stamp
+  frontend::FeatureFrame features;         ///< labelled features, removed / lost-moving ones, tracking and filter ms
+  backend::FrameResult estimate;           ///< initialized, body state, reset and status, solve and marginalization ms
   std::optional<dynamic::FrameStats> idy;  ///< IDY preprocessing statistics (idy modes only)
   /// Points the front end judged moving at this frame, triangulated in the world from their
   /// stereo match (label kEliminated, id = feature id): they go to the dynamic map.
@@ -82,8 +81,8 @@ struct Summary {
   std::size_t imu_out_of_range = 0, imu_out_of_order = 0;
   /// Short spikes within those limits dropped by the spike gate (imu/spike_gate.h): runs, samples.
   std::size_t imu_spikes = 0, imu_spike_samples = 0;
-  double td_s = 0;            ///< camera–IMU time offset at the end (the config's td unless estimated)
-  bool td_estimated = false;  ///< the config's estimate_td
+  double td_s = 0;                       ///< camera–IMU time offset at the end (the config's td unless estimated)
+  bool td_estimated = false;             ///< the config's estimate_td
   TimeNs first_t_ns = 0, last_t_ns = 0;  ///< time stamps of the first and last frame
   TimeNs init_t_ns = -1;                 ///< first initialized frame (-1: never)
   std::size_t frames_without_prior = 0;  ///< idy modes: frames the IDY filter saw without a motion prior
@@ -102,7 +101,7 @@ struct Summary {
 
 /// What finish() returns.
 struct Result {
-  std::vector<backend::MapPoint> static_map;   ///< label kStatic, id = landmark id
+  std::vector<backend::MapPoint> static_map;  ///< label kStatic, id = landmark id
   /// Eliminated points (kEliminated, in the order they were found) then confirmed-dynamic
   /// landmarks (kConfirmedDynamic).
   std::vector<backend::MapPoint> dynamic_map;
@@ -207,12 +206,12 @@ class System {
     FrameOutput out;
     std::vector<ImuSample> imu;  ///< samples up to the frame's time, not yet given to the estimator
   };
-  TimeNs imuTime(const StereoFrame& frame) const;   ///< the frame's stamp + the current offset
+  TimeNs imuTime(const StereoFrame& frame) const;  ///< the frame's stamp + the current offset
   bool imuCovers(const StereoFrame& frame) const;  ///< the IMU samples up to imuTime(frame) are here
   void process(const StereoFrame& frame);          ///< front end now, back end now or with the next frame
   frontend::MotionPrior priorFor(TimeNs t_prev, TimeNs t_cur) const;
   void backEnd(InFlight& f);  ///< estimator and dynamic map of one frame (the worker's job)
-  void completeInFlight();     ///< waits for (or runs) the back end in flight, then finalizes it
+  void completeInFlight();    ///< waits for (or runs) the back end in flight, then finalizes it
   void finalize(InFlight& f);
   void mapLostMoving(const frontend::FeatureFrame& ff, FrameOutput& out);
   void mapEliminated(const frontend::FeatureFrame& ff, FrameOutput& out);
@@ -223,8 +222,8 @@ class System {
   Config config_;
   Mode mode_;
   RunOptions run_;
-  FrontEnd front_end_;
-  backend::Estimator estimator_;
+  struct Parts;  ///< the front end and the estimator (system.cpp: Ceres and OpenCV stay there)
+  std::unique_ptr<Parts> parts_;
   std::vector<FrameObserver*> observers_;
   std::unique_ptr<InFlight> in_flight_;  ///< feedback_delay 1: the frame whose back end is pending
   std::unique_ptr<InFlight> done_;       ///< the frame last finalized (what addFrame returns)

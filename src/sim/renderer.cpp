@@ -65,8 +65,8 @@ RenderOutput Renderer::render(const std::vector<Quad>& quads, const Eigen::Isome
 Renderer::Hits Renderer::rasterize(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c) const {
   const int W = params_.width, H = params_.height;
   const std::size_t N = static_cast<std::size_t>(W) * H;
-  Hits h{std::vector<float>(N, std::numeric_limits<float>::infinity()), std::vector<int>(N, -1),
-         std::vector<float>(N), std::vector<float>(N), std::vector<float>(N)};
+  Hits h{std::vector<float>(N, std::numeric_limits<float>::infinity()), std::vector<int>(N, -1), std::vector<float>(N),
+         std::vector<float>(N), std::vector<float>(N)};
   std::vector<float>& zbuf = h.zbuf;
   std::vector<int>& hit = h.quad;
   std::vector<float>&hs = h.s, &ht = h.t, &hfoot = h.footprint;
@@ -81,8 +81,7 @@ Renderer::Hits Renderer::rasterize(const std::vector<Quad>& quads, const Eigen::
     const Vector3d n = u.cross(v);
     const double n_dot_o = n.dot(o);
     if (!q.two_sided && n_dot_o >= 0) continue;  // back face (camera behind the plane)
-    const std::vector<Vector3d> poly =
-        clipNear({o, o + u * q.width, o + u * q.width + v * q.height, o + v * q.height});
+    const std::vector<Vector3d> poly = clipNear({o, o + u * q.width, o + u * q.width + v * q.height, o + v * q.height});
     if (poly.size() < 3) continue;
     double xmin = 1e30, xmax = -1e30, ymin = 1e30, ymax = -1e30;
     for (const auto& p : poly) {
@@ -156,8 +155,7 @@ RenderOutput Renderer::shade(const std::vector<Quad>& quads, const Hits& h, bool
   return out;
 }
 
-RenderOutput Renderer::renderRadiance(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c,
-                                      bool sky) const {
+RenderOutput Renderer::renderRadiance(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c, bool sky) const {
   return shade(quads, rasterize(quads, T_w_c), sky);
 }
 

@@ -27,8 +27,8 @@ class Renderer {
   Renderer(const camera::CameraParams& params, const TextureBank& textures);
   /// Renders quads seen from T_w_c (camera pose in the world). `noise_sigma` adds
   /// Gaussian pixel noise drawn from `noise_seed`.
-  RenderOutput render(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c, bool sky,
-                      double noise_sigma, std::uint64_t noise_seed) const;
+  RenderOutput render(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c, bool sky, double noise_sigma,
+                      std::uint64_t noise_seed) const;
   /// The same scene as scene radiance before the sensor: `image` is CV_32F in gray levels
   /// (unclipped, no noise); mask and depth as render().
   RenderOutput renderRadiance(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c, bool sky) const;

@@ -36,9 +36,12 @@ Eigen::Isometry3d bodyPose(const BodyState& b) {
 }  // namespace
 
 bool parseFamily(const std::string& text, Family& family) {
-  if (text == "standard") family = Family::kStandard;
-  else if (text == "validation") family = Family::kValidation;
-  else return false;
+  if (text == "standard")
+    family = Family::kStandard;
+  else if (text == "validation")
+    family = Family::kValidation;
+  else
+    return false;
   return true;
 }
 
@@ -59,18 +62,18 @@ void validationRig(Config& c) {
     p.cx = intrinsics[i][2];
     p.cy = intrinsics[i][3];
     p.dist = {0.0, 0.0, 0.0, 0.0};
-    const Eigen::Matrix3d R_err = (Eigen::AngleAxisd(mount[i][2], Vector3d::UnitY()) *
-                                   Eigen::AngleAxisd(mount[i][1], Vector3d::UnitX()) *
-                                   Eigen::AngleAxisd(mount[i][0], Vector3d::UnitZ()))
-                                      .toRotationMatrix();  // in the camera frame: y down, x right, z forward
+    const Eigen::Matrix3d R_err =
+        (Eigen::AngleAxisd(mount[i][2], Vector3d::UnitY()) * Eigen::AngleAxisd(mount[i][1], Vector3d::UnitX()) *
+         Eigen::AngleAxisd(mount[i][0], Vector3d::UnitZ()))
+            .toRotationMatrix();  // in the camera frame: y down, x right, z forward
     c.T_b_c[i].linear() = c.T_b_c[i].linear() * R_err;
     c.T_b_c[i].translation() = Vector3d(0.06, i == 0 ? 0.055 : -0.055, 0.01);
   }
   // VINS-Fusion's own EuRoC config values, as a user with an EuRoC-like IMU would write them.
-  c.imu.acc_n = 0.1;
-  c.imu.gyr_n = 0.01;
-  c.imu.acc_w = 0.001;
-  c.imu.gyr_w = 0.0001;
+  c.imu.noise.acc_n = 0.1;
+  c.imu.noise.gyr_n = 0.01;
+  c.imu.noise.acc_w = 0.001;
+  c.imu.noise.gyr_w = 0.0001;
 }
 
 }  // namespace
@@ -102,11 +105,11 @@ Config rigConfig(const SimOptions& options) {
   // acc_w such that acc_w² δt² = random_walk² δt.
   const double rate = options.imu_rate_hz;
   const ImuErrorModel& m = options.imu;
-  c.imu.acc_n = std::sqrt(2.0) * m.acc_density * std::sqrt(rate);
-  c.imu.gyr_n = std::sqrt(2.0) * m.gyro_density * std::sqrt(rate);
-  c.imu.acc_w = m.acc_random_walk * std::sqrt(rate);
-  c.imu.gyr_w = m.gyro_random_walk * std::sqrt(rate);
-  c.imu.g_norm = options.g_norm;
+  c.imu.noise.acc_n = std::sqrt(2.0) * m.acc_density * std::sqrt(rate);
+  c.imu.noise.gyr_n = std::sqrt(2.0) * m.gyro_density * std::sqrt(rate);
+  c.imu.noise.acc_w = m.acc_random_walk * std::sqrt(rate);
+  c.imu.noise.gyr_w = m.gyro_random_walk * std::sqrt(rate);
+  c.imu.noise.g_norm = options.g_norm;
   if (options.family == Family::kValidation) validationRig(c);
   // A real camera's config: right matches refined gain- and bias-invariantly (KLT's
   // disparity is biased by brightness differences a global gain leaves, see TrackerParams).
@@ -165,8 +168,8 @@ std::string matrixYaml(const Eigen::Matrix4d& m, const char* indent) {
   char buf[512];
   std::string s = std::string(indent) + "rows: 4\n" + indent + "cols: 4\n" + indent + "dt: d\n" + indent + "data: [";
   for (int i = 0; i < 16; ++i) {
-    std::snprintf(buf, sizeof(buf), "%s%.10g", i ? (i % 4 ? ", " : ",\n" + std::string(indent) + "       ").c_str() : "",
-                  m(i / 4, i % 4));
+    std::snprintf(buf, sizeof(buf), "%s%.10g",
+                  i ? (i % 4 ? ", " : ",\n" + std::string(indent) + "       ").c_str() : "", m(i / 4, i % 4));
     s += buf;
   }
   return s + "]\n";
@@ -180,8 +183,8 @@ void writeSensorYamls(const fs::path& mav0, const Config& c, const SimOptions& o
                   "%%YAML:1.0\nsensor_type: camera\ncomment: idyvins simulator cam%d\nT_BS:\n%s"
                   "rate_hz: %g\nresolution: [%d, %d]\ncamera_model: pinhole\nintrinsics: [%g, %g, %g, %g]\n"
                   "distortion_model: radial-tangential\ndistortion_coefficients: [%g, %g, %g, %g]\n",
-                  i, matrixYaml(c.T_b_c[i].matrix(), "  ").c_str(), o.camera_rate_hz, p.width, p.height, p.fx,
-                  p.fy, p.cx, p.cy, p.dist[0], p.dist[1], p.dist[2], p.dist[3]);
+                  i, matrixYaml(c.T_b_c[i].matrix(), "  ").c_str(), o.camera_rate_hz, p.width, p.height, p.fx, p.fy,
+                  p.cx, p.cy, p.dist[0], p.dist[1], p.dist[2], p.dist[3]);
     writeText(mav0 / ("cam" + std::to_string(i)) / "sensor.yaml", buf);
   }
   char buf[1024];
@@ -200,8 +203,9 @@ void writeSensorYamls(const fs::path& mav0, const Config& c, const SimOptions& o
 
 void writeImuAndTruth(const fs::path& mav0, const std::vector<ImuSample>& imu,
                       const std::vector<GroundTruthState>& truth) {
-  std::string s = "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
-                  "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n";
+  std::string s =
+      "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+      "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n";
   char buf[512];
   for (const auto& m : imu) {
     std::snprintf(buf, sizeof(buf), "%lld,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n", static_cast<long long>(m.t_ns),
@@ -214,7 +218,8 @@ void writeImuAndTruth(const fs::path& mav0, const std::vector<ImuSample>& imu,
 
 nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult& r, const Config& rig) {
   nlohmann::json parked = nlohmann::json::array();
-  for (const auto& [lo, hi] : world.parked) parked.push_back({{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}});
+  for (const auto& [lo, hi] : world.parked)
+    parked.push_back({{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}});
   nlohmann::json objects = nlohmann::json::array();
   for (const auto& v : world.vehicles) {
     objects.push_back({{"id", v.id},
@@ -276,7 +281,9 @@ void writeVinsConfig(const Config& c, const std::string& folder, const std::stri
   // The values the simulator's configs have always carried: IMU keys to 6 significant
   // digits, extrinsics and intrinsics to 10 (so that old and new renders run alike).
   Config w = c;
-  for (double* v : {&w.imu.acc_n, &w.imu.gyr_n, &w.imu.acc_w, &w.imu.gyr_w, &w.imu.g_norm}) *v = significant(*v, 6);
+  for (double* v :
+       {&w.imu.noise.acc_n, &w.imu.noise.gyr_n, &w.imu.noise.acc_w, &w.imu.noise.gyr_w, &w.imu.noise.g_norm})
+    *v = significant(*v, 6);
   for (auto& T : w.T_b_c) {
     Eigen::Matrix4d m = T.matrix();
     for (int k = 0; k < 16; ++k) m(k / 4, k % 4) = significant(m(k / 4, k % 4), 10);
@@ -330,7 +337,8 @@ Scene::Scene(const SimOptions& o)
   std::vector<double> meter(frames_);
   for (std::size_t k = 0; k < frames_; ++k) {
     const double t = static_cast<double>(k) / o.camera_rate_hz;
-    cv::Mat rad = meter_renderer.renderRadiance(world_.quadsAt(t), bodyPose(trajectory_.at(t)) * rig_.T_b_c[0], world_.sky).image;
+    cv::Mat rad =
+        meter_renderer.renderRadiance(world_.quadsAt(t), bodyPose(trajectory_.at(t)) * rig_.T_b_c[0], world_.sky).image;
     cv::multiply(rad, meter_vignetting, rad);
     meter[k] = cv::mean(rad)[0];
   }
@@ -467,7 +475,8 @@ SimResult simulate(const SimOptions& o, const std::string& out_dir,
   const auto start = std::chrono::steady_clock::now();
   const fs::path root(out_dir), mav0 = root / "mav0";
   std::error_code ec;
-  std::vector<std::string> subs = {"cam0/data", "cam0/mask", "cam1/data", "cam1/mask", "imu0", "state_groundtruth_estimate0"};
+  std::vector<std::string> subs = {"cam0/data", "cam0/mask", "cam1/data",
+                                   "cam1/mask", "imu0",      "state_groundtruth_estimate0"};
   if (o.write_depth) subs.insert(subs.end(), {"cam0/depth", "cam1/depth"});
   for (const std::string& sub : subs) {
     fs::create_directories(mav0 / sub, ec);

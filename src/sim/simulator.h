@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "config/config.h"
 #include "core/measurements.h"
-#include "io/config.h"
 #include "sim/camera_effects.h"
 #include "sim/renderer.h"
 #include "sim/trajectory.h"
@@ -18,13 +18,13 @@ namespace idyvins::sim {
 
 /// IMU error model (continuous-time densities; defaults: ADIS16448 as in EuRoC's sensor.yaml).
 struct ImuErrorModel {
-  double gyro_density = 1.6968e-4;  ///< rad/s/√Hz
+  double gyro_density = 1.6968e-4;      ///< rad/s/√Hz
   double gyro_random_walk = 1.9393e-5;  ///< rad/s²/√Hz
-  double acc_density = 2.0e-3;      ///< m/s²/√Hz
-  double acc_random_walk = 3.0e-3;  ///< m/s³/√Hz
-  double gyro_bias0_sigma = 0.003;  ///< rad/s, random initial bias
-  double acc_bias0_sigma = 0.05;    ///< m/s², random initial bias
-  double scale = 1.0;               ///< multiplies every term (0 = perfect IMU)
+  double acc_density = 2.0e-3;          ///< m/s²/√Hz
+  double acc_random_walk = 3.0e-3;      ///< m/s³/√Hz
+  double gyro_bias0_sigma = 0.003;      ///< rad/s, random initial bias
+  double acc_bias0_sigma = 0.05;        ///< m/s², random initial bias
+  double scale = 1.0;                   ///< multiplies every term (0 = perfect IMU)
 };
 
 /// Which family of sequences: the one the defaults are tuned on, or the validation family
@@ -85,9 +85,9 @@ struct SimResult {
 struct SceneFrame {
   std::size_t index = 0;
   TimeNs t_ns = 0;
-  double t_s = 0;              ///< seconds since the start
-  Eigen::Isometry3d T_w_b;     ///< body pose
-  RenderOutput cam[2];         ///< left, right: image, mask, depth
+  double t_s = 0;           ///< seconds since the start
+  Eigen::Isometry3d T_w_b;  ///< body pose
+  RenderOutput cam[2];      ///< left, right: image, mask, depth
 };
 
 /// A scene ready to render in memory: rig, textures, world, trajectory, renderers.
@@ -114,8 +114,8 @@ class Scene {
   Trajectory trajectory_;
   std::vector<Renderer> renderers_;
   std::size_t frames_;
-  cv::Mat vignetting_[2];          ///< realism: V(r) per camera
-  std::vector<double> exposure_;   ///< realism: auto-exposure factor per frame
+  cv::Mat vignetting_[2];         ///< realism: V(r) per camera
+  std::vector<double> exposure_;  ///< realism: auto-exposure factor per frame
   /// realism: one camera's radiance averaged over the exposure (sub-frames along the
   /// trajectory, vehicles moving); mask and depth at the frame's time.
   RenderOutput exposedRadiance(int cam, double t_s) const;

@@ -18,8 +18,7 @@ cv::Mat background(cv::RNG& rng, int n, double mean, double amplitude, int cells
   return big;
 }
 
-void randomShapes(cv::Mat& img, cv::RNG& rng, int rects, int circles, int lines, int min_size,
-                  int max_size) {
+void randomShapes(cv::Mat& img, cv::RNG& rng, int rects, int circles, int lines, int min_size, int max_size) {
   const int n = img.cols;
   for (int i = 0; i < rects; ++i) {
     const int w = rng.uniform(min_size, max_size), h = rng.uniform(min_size, max_size);
@@ -116,7 +115,8 @@ void cracks(cv::Mat& f, cv::RNG& rng, int n, int count) {
     for (int k = 0; k < segments; ++k) {
       heading += rng.gaussian(0.6);
       const int len = rng.uniform(n / 100, n / 30);
-      const cv::Point q(p.x + static_cast<int>(len * std::cos(heading)), p.y + static_cast<int>(len * std::sin(heading)));
+      const cv::Point q(p.x + static_cast<int>(len * std::cos(heading)),
+                        p.y + static_cast<int>(len * std::sin(heading)));
       cv::line(f, p, q, cv::Scalar(rng.uniform(30, 70)), rng.uniform(1, 3), cv::LINE_AA);
       p = q;
     }
@@ -186,11 +186,20 @@ cv::Mat validationConcrete(cv::RNG& rng, int n) {
 cv::Mat makeValidationTexture(TextureKind kind, cv::RNG& rng, int n) {
   cv::Mat f;
   switch (kind) {
-    case TextureKind::kFacade: f = validationFacade(rng, n); break;
-    case TextureKind::kGround: f = validationAsphalt(rng, n); break;
-    case TextureKind::kVehicle: f = validationVehicle(rng, n); break;
-    case TextureKind::kConcrete: f = validationConcrete(rng, n); break;
-    case TextureKind::kChecker: return makeTexture(kind, rng, n);
+    case TextureKind::kFacade:
+      f = validationFacade(rng, n);
+      break;
+    case TextureKind::kGround:
+      f = validationAsphalt(rng, n);
+      break;
+    case TextureKind::kVehicle:
+      f = validationVehicle(rng, n);
+      break;
+    case TextureKind::kConcrete:
+      f = validationConcrete(rng, n);
+      break;
+    case TextureKind::kChecker:
+      return makeTexture(kind, rng, n);
   }
   cv::GaussianBlur(f, f, cv::Size(0, 0), 1.0);
   cv::Mat out;

@@ -25,8 +25,7 @@ struct Texture {
 class TextureBank {
  public:
   /// Builds `per_kind` textures of each kind (plus one checkerboard) of size 2^log2_size.
-  TextureBank(std::uint64_t seed, int per_kind = 3, int log2_size = 10,
-              TextureStyle style = TextureStyle::kStandard);
+  TextureBank(std::uint64_t seed, int per_kind = 3, int log2_size = 10, TextureStyle style = TextureStyle::kStandard);
 
   /// Index of the i-th texture of a kind (i wraps).
   int index(TextureKind kind, int i) const;

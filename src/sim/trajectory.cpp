@@ -48,81 +48,93 @@ Eigen::Vector2d Trajectory::BlockRoute::position(double s) const {
   const Eigen::Vector2d m0 = step * Eigen::Vector2d(std::cos(psi0), std::sin(psi0));
   const Eigen::Vector2d m1 = step * Eigen::Vector2d(std::cos(psi1), std::sin(psi1));
   const double u2 = u * u, u3 = u2 * u;
-  return (2 * u3 - 3 * u2 + 1) * table[i] + (u3 - 2 * u2 + u) * m0 + (-2 * u3 + 3 * u2) * table[i + 1] +
-         (u3 - u2) * m1;
+  return (2 * u3 - 3 * u2 + 1) * table[i] + (u3 - 2 * u2 + u) * m0 + (-2 * u3 + 3 * u2) * table[i + 1] + (u3 - u2) * m1;
 }
 
-Trajectory::Trajectory(const std::string& scene, std::uint64_t seed, double g_norm, TrajectoryStyle style,
-                       bool block)
+Trajectory::Trajectory(const std::string& scene, std::uint64_t seed, double g_norm, TrajectoryStyle style, bool block)
     : style_(style), g_norm_(g_norm) {
   std::mt19937_64 rng(seed * 7919 + 3);
-  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
-  const double two_pi = 2.0 * M_PI;
   if (scene != "city" && scene != "parking_lot")
     throw std::invalid_argument("unknown scene '" + scene + "' (expected city or parking_lot)");
   if (block) {
     if (scene != "city" || style != TrajectoryStyle::kDrone)
       throw std::invalid_argument("the block route is flown by the drone in the city");
-    block_ = true;
-    BlockRoute& r = route_;
-    // How far a turn reaches along its entry (and, by symmetry, its exit) direction.
-    double reach = 0;
-    const int n_turn = 20000;
-    for (int i = 0; i < n_turn; ++i) {  // midpoint rule on a smooth integrand
-      const double u = (i + 0.5) / n_turn;
-      reach += std::cos((M_PI / 2) * (u - std::sin(2 * M_PI * u) / (2 * M_PI))) * r.turn_length / n_turn;
-    }
-    r.straight_x = (kBlockX1 - kBlockX0) - 2 * reach;
-    r.straight_y = (kBlockY0 - kBlockY1) - 2 * reach;
-    r.lap = 2 * (r.straight_x + r.straight_y) + 4 * r.turn_length;
-    r.start = Eigen::Vector2d(kBlockX0 + reach, kBlockY0);
-    // Position table: RK4 (Simpson) on dp/ds = (cos psi, sin psi), exact psi.
-    const std::size_t n = static_cast<std::size_t>(std::ceil(r.lap / r.step)) + 2;
-    r.table.resize(n);
-    r.table[0] = r.start;
-    auto tangent = [&](double s) {
-      const double psi = r.heading(std::fmod(s, r.lap), nullptr);
-      return Eigen::Vector2d(std::cos(psi), std::sin(psi));
-    };
-    for (std::size_t i = 1; i < n; ++i) {
-      const double s = static_cast<double>(i - 1) * r.step;
-      r.table[i] = r.table[i - 1] + r.step / 6 * (tangent(s) + 4 * tangent(s + r.step / 2) + tangent(s + r.step));
-    }
-    r.s0 = r.lap * std::uniform_real_distribution<double>(0.0, 1.0)(rng);  // where the run starts
-    // 4 m up (above the trucks' roofs where the turns cross the lanes), small world-frame waves.
-    c0_ = {0.0, 0.0, 4.0};
-    waves_[0] = {{{0.15, two_pi / 7.0, phase(rng)}, {0, 1, 0}, {0, 1, 0}}};
-    waves_[1] = {{{0.15, two_pi / 6.0, phase(rng)}, {0, 1, 0}, {0, 1, 0}}};
-    waves_[2] = {{{0.3, two_pi / 7.0, phase(rng)}, {0.08, two_pi / 2.9, phase(rng)}, {0, 1, 0}}};
-    yaw_wave_ = {0.3, two_pi / 8.0, phase(rng)};
-    return;
+    setUpBlockLap(rng);
+  } else if (style == TrajectoryStyle::kHandheld) {
+    setUpHandheld(scene, rng);
+  } else {
+    setUpDrone(scene, rng);
   }
-  if (style == TrajectoryStyle::kHandheld) {
-    // Walking at about 1.3 m/s with a 1.8 Hz gait (vertical bob 3 cm, sideways sway at half
-    // the step rate), the hand pitching and rolling a few degrees, looking around by ±0.5 rad.
-    const double step = two_pi * 1.8;
-    if (scene == "city") {
-      c0_ = {0.0, 0.0, 1.7};  // along the street near the centre line, below the trucks' roofs
-      c1_ = {1.3, 0.0, 0.0};
-      waves_[0] = {{{0.25 / (two_pi / 13.0), two_pi / 13.0, phase(rng)}, {0.02, step, phase(rng)}, {0, 1, 0}}};
-      waves_[1] = {{{0.5, two_pi / 17.0, phase(rng)}, {0.035, step / 2, phase(rng)}, {0, 1, 0}}};
-    } else {
-      // Clockwise around the garage centre, between the two traffic loops.
-      ellipse_ = true;
-      ell_a_ = 13.8;
-      ell_b_ = 8.1;
-      ell_w_ = -0.15;
-      ell_phase_ = phase(rng);
-      c0_ = {0.0, 0.0, 1.7};
-      waves_[0] = {{{0.3, two_pi / 7.0, phase(rng)}, {0.02, step, phase(rng)}, {0, 1, 0}}};
-      waves_[1] = {{{0.3, two_pi / 9.0, phase(rng)}, {0.035, step / 2, phase(rng)}, {0, 1, 0}}};
-    }
-    waves_[2] = {{{0.1, two_pi / 11.0, phase(rng)}, {0.03, step, phase(rng)}, {0, 1, 0}}};
-    yaw_wave_ = {0.5, two_pi / 9.0, phase(rng)};
-    pitch_waves_ = {{{0.08, two_pi / 6.3, phase(rng)}, {0.015, step, phase(rng)}}};
-    roll_waves_ = {{{0.05, two_pi / 5.1, phase(rng)}, {0.012, step / 2, phase(rng)}}};
-    return;
+}
+
+void Trajectory::setUpBlockLap(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
+  const double two_pi = 2.0 * M_PI;
+  block_ = true;
+  BlockRoute& r = route_;
+  // How far a turn reaches along its entry (and, by symmetry, its exit) direction.
+  double reach = 0;
+  const int n_turn = 20000;
+  for (int i = 0; i < n_turn; ++i) {  // midpoint rule on a smooth integrand
+    const double u = (i + 0.5) / n_turn;
+    reach += std::cos((M_PI / 2) * (u - std::sin(2 * M_PI * u) / (2 * M_PI))) * r.turn_length / n_turn;
   }
+  r.straight_x = (kBlockX1 - kBlockX0) - 2 * reach;
+  r.straight_y = (kBlockY0 - kBlockY1) - 2 * reach;
+  r.lap = 2 * (r.straight_x + r.straight_y) + 4 * r.turn_length;
+  r.start = Eigen::Vector2d(kBlockX0 + reach, kBlockY0);
+  // Position table: RK4 (Simpson) on dp/ds = (cos psi, sin psi), exact psi.
+  const std::size_t n = static_cast<std::size_t>(std::ceil(r.lap / r.step)) + 2;
+  r.table.resize(n);
+  r.table[0] = r.start;
+  auto tangent = [&](double s) {
+    const double psi = r.heading(std::fmod(s, r.lap), nullptr);
+    return Eigen::Vector2d(std::cos(psi), std::sin(psi));
+  };
+  for (std::size_t i = 1; i < n; ++i) {
+    const double s = static_cast<double>(i - 1) * r.step;
+    r.table[i] = r.table[i - 1] + r.step / 6 * (tangent(s) + 4 * tangent(s + r.step / 2) + tangent(s + r.step));
+  }
+  r.s0 = r.lap * std::uniform_real_distribution<double>(0.0, 1.0)(rng);  // where the run starts
+  // 4 m up (above the trucks' roofs where the turns cross the lanes), small world-frame waves.
+  c0_ = {0.0, 0.0, 4.0};
+  waves_[0] = {{{0.15, two_pi / 7.0, phase(rng)}, {0, 1, 0}, {0, 1, 0}}};
+  waves_[1] = {{{0.15, two_pi / 6.0, phase(rng)}, {0, 1, 0}, {0, 1, 0}}};
+  waves_[2] = {{{0.3, two_pi / 7.0, phase(rng)}, {0.08, two_pi / 2.9, phase(rng)}, {0, 1, 0}}};
+  yaw_wave_ = {0.3, two_pi / 8.0, phase(rng)};
+}
+
+void Trajectory::setUpHandheld(const std::string& scene, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
+  const double two_pi = 2.0 * M_PI;
+  // Walking at about 1.3 m/s with a 1.8 Hz gait (vertical bob 3 cm, sideways sway at half
+  // the step rate), the hand pitching and rolling a few degrees, looking around by ±0.5 rad.
+  const double step = two_pi * 1.8;
+  if (scene == "city") {
+    c0_ = {0.0, 0.0, 1.7};  // along the street near the centre line, below the trucks' roofs
+    c1_ = {1.3, 0.0, 0.0};
+    waves_[0] = {{{0.25 / (two_pi / 13.0), two_pi / 13.0, phase(rng)}, {0.02, step, phase(rng)}, {0, 1, 0}}};
+    waves_[1] = {{{0.5, two_pi / 17.0, phase(rng)}, {0.035, step / 2, phase(rng)}, {0, 1, 0}}};
+  } else {
+    // Clockwise around the garage centre, between the two traffic loops.
+    ellipse_ = true;
+    ell_a_ = 13.8;
+    ell_b_ = 8.1;
+    ell_w_ = -0.15;
+    ell_phase_ = phase(rng);
+    c0_ = {0.0, 0.0, 1.7};
+    waves_[0] = {{{0.3, two_pi / 7.0, phase(rng)}, {0.02, step, phase(rng)}, {0, 1, 0}}};
+    waves_[1] = {{{0.3, two_pi / 9.0, phase(rng)}, {0.035, step / 2, phase(rng)}, {0, 1, 0}}};
+  }
+  waves_[2] = {{{0.1, two_pi / 11.0, phase(rng)}, {0.03, step, phase(rng)}, {0, 1, 0}}};
+  yaw_wave_ = {0.5, two_pi / 9.0, phase(rng)};
+  pitch_waves_ = {{{0.08, two_pi / 6.3, phase(rng)}, {0.015, step, phase(rng)}}};
+  roll_waves_ = {{{0.05, two_pi / 5.1, phase(rng)}, {0.012, step / 2, phase(rng)}}};
+}
+
+void Trajectory::setUpDrone(const std::string& scene, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> phase(0.0, 2.0 * M_PI);
+  const double two_pi = 2.0 * M_PI;
   if (scene == "city") {
     // Along the street (+x) at 1.4-2.6 m/s, close to the centre line, about 2.2 m up.
     c0_ = {0.0, 0.0, 2.2};
@@ -159,9 +171,12 @@ Vector3d Trajectory::deriv(double t, int order) const {
     const double psi = route_.heading(s, &kappa);
     const double v = route_.speed;
     Eigen::Vector2d d;
-    if (order == 0) d = route_.position(s);
-    else if (order == 1) d = v * Eigen::Vector2d(std::cos(psi), std::sin(psi));
-    else d = v * v * kappa * Eigen::Vector2d(-std::sin(psi), std::cos(psi));
+    if (order == 0)
+      d = route_.position(s);
+    else if (order == 1)
+      d = v * Eigen::Vector2d(std::cos(psi), std::sin(psi));
+    else
+      d = v * v * kappa * Eigen::Vector2d(-std::sin(psi), std::cos(psi));
     out.x() += d.x();
     out.y() += d.y();
   }

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -12,9 +13,9 @@ namespace idyvins::sim {
 
 /// Kinematic state of the body at one instant.
 struct BodyState {
-  Eigen::Vector3d p_w_b, v_w, a_w;   ///< position, velocity, acceleration in the world
-  Eigen::Quaterniond q_w_b;          ///< orientation
-  Eigen::Vector3d omega_b;           ///< angular rate in the body frame (rad/s)
+  Eigen::Vector3d p_w_b, v_w, a_w;  ///< position, velocity, acceleration in the world
+  Eigen::Quaterniond q_w_b;         ///< orientation
+  Eigen::Vector3d omega_b;          ///< angular rate in the body frame (rad/s)
 };
 
 /// How the rig is carried.
@@ -45,6 +46,9 @@ class Trajectory {
   };
   Eigen::Vector3d deriv(double t, int order) const;
   double yaw(double t) const;
+  void setUpBlockLap(std::mt19937_64& rng);                            ///< the drone's lap of a city block
+  void setUpHandheld(const std::string& scene, std::mt19937_64& rng);  ///< a walk with the rig in hand
+  void setUpDrone(const std::string& scene, std::mt19937_64& rng);     ///< the tuning suites' drone
   std::array<double, 3> c0_{}, c1_{};
   std::array<std::array<Wave, 3>, 3> waves_{};
   bool ellipse_ = false;  ///< parking lot: ellipse around the centre

@@ -13,8 +13,8 @@ namespace {
 
 /// Oriented box from a corner along unit axes ax, ay, az (right-handed), lengths l.
 void addOrientedBox(std::vector<Quad>& quads, const Vector3d& c, const Vector3d& ax, const Vector3d& ay,
-                    const Vector3d& az, const Vector3d& l, int texture, float albedo, bool inward,
-                    bool with_bottom, std::uint8_t object_id) {
+                    const Vector3d& az, const Vector3d& l, int texture, float albedo, bool inward, bool with_bottom,
+                    std::uint8_t object_id) {
   struct Face {
     Vector3d origin, u, v;
     double w, h;
@@ -22,11 +22,11 @@ void addOrientedBox(std::vector<Quad>& quads, const Vector3d& c, const Vector3d&
   };
   const Vector3d X = ax * l.x(), Y = ay * l.y(), Z = az * l.z();
   std::vector<Face> faces = {
-      {c + Y, -ay, az, l.y(), l.z(), 0.85f},          // -x
-      {c + X, ay, az, l.y(), l.z(), 0.95f},           // +x
-      {c, ax, az, l.x(), l.z(), 0.9f},                // -y
-      {c + X + Y, -ax, az, l.x(), l.z(), 0.8f},       // +y
-      {c + Z, ax, ay, l.x(), l.y(), 1.05f},           // +z (top)
+      {c + Y, -ay, az, l.y(), l.z(), 0.85f},     // -x
+      {c + X, ay, az, l.y(), l.z(), 0.95f},      // +x
+      {c, ax, az, l.x(), l.z(), 0.9f},           // -y
+      {c + X + Y, -ax, az, l.x(), l.z(), 0.8f},  // +y
+      {c + Z, ax, ay, l.x(), l.y(), 1.05f},      // +z (top)
   };
   if (with_bottom) faces.push_back({c + Y, ax, -ay, l.x(), l.y(), 0.7f});  // -z
   for (const Face& f : faces) {
@@ -118,8 +118,10 @@ void addCityStatics(World& w, std::mt19937_64& rng, const TextureBank& tex) {
     }
   }
   // Buildings closing both ends of the street.
-  addBox(w.statics, Vector3d(262, -40, 0), Vector3d(280, 40, 22), tex.index(TextureKind::kFacade, 1), 1.0f, false, false);
-  addBox(w.statics, Vector3d(-95, -40, 0), Vector3d(-82, 40, 22), tex.index(TextureKind::kFacade, 2), 1.0f, false, false);
+  addBox(w.statics, Vector3d(262, -40, 0), Vector3d(280, 40, 22), tex.index(TextureKind::kFacade, 1), 1.0f, false,
+         false);
+  addBox(w.statics, Vector3d(-95, -40, 0), Vector3d(-82, 40, 22), tex.index(TextureKind::kFacade, 2), 1.0f, false,
+         false);
   // Parked cars along both curbs.
   for (int side : {-1, 1})
     for (double x = -50; x < 245; x += 6.0 + 3.0 * U(rng)) {
@@ -143,8 +145,10 @@ void addCityStatics(World& w, std::mt19937_64& rng, const TextureBank& tex) {
 void addCityTraffic(World& w, const SceneOptions& o, std::mt19937_64& rng, const TextureBank& tex) {
   std::uniform_real_distribution<double> U(0.0, 1.0);
   // Lanes: along the street (right-hand traffic) and along the three cross streets.
-  std::vector<LaneSpec> lanes = {{{-90, -5.5, 0}, {1, 0, 0}, 370}, {{-90, -2.5, 0}, {1, 0, 0}, 370},
-                                 {{280, 2.5, 0}, {-1, 0, 0}, 370},  {{280, 5.5, 0}, {-1, 0, 0}, 370}};
+  std::vector<LaneSpec> lanes = {{{-90, -5.5, 0}, {1, 0, 0}, 370},
+                                 {{-90, -2.5, 0}, {1, 0, 0}, 370},
+                                 {{280, 2.5, 0}, {-1, 0, 0}, 370},
+                                 {{280, 5.5, 0}, {-1, 0, 0}, 370}};
   for (double cx : {60.0, 130.0, 200.0}) {
     lanes.push_back({{cx - 3, -80, 0}, {0, 1, 0}, 160});
     lanes.push_back({{cx + 3, 80, 0}, {0, -1, 0}, 160});
@@ -160,7 +164,7 @@ void addCityTraffic(World& w, const SceneOptions& o, std::mt19937_64& rng, const
   };
   auto rnd = [&](double a, double b) { return a + (b - a) * U(rng); };
   if (o.level == Level::kLow) {
-    add(6, "car", rnd(4, 7), rnd(0, 160));   // cross street far ahead
+    add(6, "car", rnd(4, 7), rnd(0, 160));  // cross street far ahead
     add(9, "van", rnd(4, 7), rnd(0, 160));
     add(3, "car", rnd(5, 8), rnd(60, 120));  // oncoming, outer lane, far at first
   } else if (o.level == Level::kMid) {
@@ -201,8 +205,10 @@ void addBackStreetStatics(World& w, std::mt19937_64& rng, const TextureBank& tex
       x += len;
     }
   }
-  addBox(w.statics, Vector3d(262, -80, 0), Vector3d(280, -40, 22), tex.index(TextureKind::kFacade, 3), 1.0f, false, false);
-  addBox(w.statics, Vector3d(-95, -80, 0), Vector3d(-82, -40, 22), tex.index(TextureKind::kFacade, 4), 1.0f, false, false);
+  addBox(w.statics, Vector3d(262, -80, 0), Vector3d(280, -40, 22), tex.index(TextureKind::kFacade, 3), 1.0f, false,
+         false);
+  addBox(w.statics, Vector3d(-95, -80, 0), Vector3d(-82, -40, 22), tex.index(TextureKind::kFacade, 4), 1.0f, false,
+         false);
 }
 
 /// Traffic of a level for laps around the block: both directions on the main and the back
@@ -296,7 +302,7 @@ void addGarageStatics(World& w, std::mt19937_64& rng, const TextureBank& tex) {
   w.statics.front().texture = tex.index(TextureKind::kConcrete, 1);
   w.statics[4].texture = tex.index(TextureKind::kConcrete, 2);  // ceiling
   w.statics[4].albedo = 0.75f;
-  w.statics[5].texture = tex.index(TextureKind::kGround, 1);    // floor
+  w.statics[5].texture = tex.index(TextureKind::kGround, 1);  // floor
   // Pillars, except near the drone's elliptic path (a = 14, b = 8).
   int k = 0;
   for (double px : {-21.0, -14.0, -7.0, 0.0, 7.0, 14.0, 21.0})
@@ -379,8 +385,8 @@ World buildParkingLot(const SceneOptions& o, const TextureBank& tex) {
 
 }  // namespace
 
-void addBox(std::vector<Quad>& quads, const Vector3d& min, const Vector3d& max, int texture, float albedo,
-            bool inward, bool with_bottom, std::uint8_t object_id) {
+void addBox(std::vector<Quad>& quads, const Vector3d& min, const Vector3d& max, int texture, float albedo, bool inward,
+            bool with_bottom, std::uint8_t object_id) {
   addOrientedBox(quads, min, Vector3d::UnitX(), Vector3d::UnitY(), Vector3d::UnitZ(), max - min, texture, albedo,
                  inward, with_bottom, object_id);
 }
@@ -447,9 +453,12 @@ const char* toString(Level level) {
 }
 
 bool parseRoute(const std::string& text, Route& route) {
-  if (text == "default") route = Route::kDefault;
-  else if (text == "block") route = Route::kBlock;
-  else return false;
+  if (text == "default")
+    route = Route::kDefault;
+  else if (text == "block")
+    route = Route::kBlock;
+  else
+    return false;
   return true;
 }
 

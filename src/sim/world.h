@@ -20,7 +20,7 @@ struct Quad {
   double width = 1, height = 1;
   int texture = 0;
   double tex_offset_s = 0, tex_offset_t = 0;
-  float albedo = 1.0f;   ///< brightness factor
+  float albedo = 1.0f;  ///< brightness factor
   /// Texture contrast around the texture's mean (1: as generated; < 1: plainer material,
   /// simulate --realism).
   float contrast = 1.0f;
@@ -31,19 +31,19 @@ struct Quad {
 /// A box-shaped vehicle driving along a straight lane (wrapping around) or around
 /// an elliptic loop (centre lane_start, semi-axes ellipse_a/b along x/y).
 struct Vehicle {
-  int id = 1;                  ///< object id in masks (1..255)
-  std::string type;            ///< car, van, truck
+  int id = 1;                                            ///< object id in masks (1..255)
+  std::string type;                                      ///< car, van, truck
   Eigen::Vector3d size = Eigen::Vector3d::Zero();        ///< length, width, height (m)
   Eigen::Vector3d lane_start = Eigen::Vector3d::Zero();  ///< lane start (ground point)
   Eigen::Vector3d lane_dir = Eigen::Vector3d::Zero();    ///< unit direction of travel (zero on loops)
-  double lane_length = 100;    ///< the vehicle wraps after this distance
-  double speed = 5;            ///< m/s
-  double offset = 0;           ///< position along the lane at t = 0 (m)
+  double lane_length = 100;                              ///< the vehicle wraps after this distance
+  double speed = 5;                                      ///< m/s
+  double offset = 0;                                     ///< position along the lane at t = 0 (m)
   int texture = 0;
   float albedo = 1.0f;
-  bool ellipse = false;              ///< elliptic loop instead of a straight lane
+  bool ellipse = false;  ///< elliptic loop instead of a straight lane
   double ellipse_a = 0, ellipse_b = 0;
-  double direction = 1.0;            ///< +1 counter-clockwise, -1 clockwise (loops)
+  double direction = 1.0;  ///< +1 counter-clockwise, -1 clockwise (loops)
   /// Centre of the box's bottom face at time t.
   Eigen::Vector3d position(double t) const;
   /// Unit direction of travel at time t.
@@ -107,7 +107,7 @@ struct SceneOptions {
 World buildWorld(const SceneOptions& options, const TextureBank& textures);
 
 /// Axis-aligned textured box (5 or 6 faces facing outwards, or inwards for rooms).
-void addBox(std::vector<Quad>& quads, const Eigen::Vector3d& min, const Eigen::Vector3d& max, int texture,
-            float albedo, bool inward, bool with_bottom, std::uint8_t object_id = 0);
+void addBox(std::vector<Quad>& quads, const Eigen::Vector3d& min, const Eigen::Vector3d& max, int texture, float albedo,
+            bool inward, bool with_bottom, std::uint8_t object_id = 0);
 
 }  // namespace idyvins::sim

@@ -3,24 +3,23 @@
 // reader reads it. A reader may only accept the input or throw InputError (one clear line); any
 // other exception, crash or sanitizer report is a finding.
 
+#include <unistd.h>
+
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <string>
-#include <unistd.h>
 
+#include "config/config.h"
 #include "core/error.h"
 #include "io/bag_dataset.h"
-#include "io/config.h"
 #include "io/euroc_dataset.h"
 #include "io/trajectory_io.h"
 
 namespace {
 
-std::string scratch(const char* name) {
-  return "/tmp/idyvins_fuzz_" + std::to_string(::getpid()) + "_" + name;
-}
+std::string scratch(const char* name) { return "/tmp/idyvins_fuzz_" + std::to_string(::getpid()) + "_" + name; }
 
 void writeFile(const std::string& path, const std::uint8_t* data, std::size_t size) {
   std::ofstream f(path, std::ios::binary | std::ios::trunc);

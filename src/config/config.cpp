@@ -1,18 +1,19 @@
-#include "io/config.h"
+#include "config/config.h"
 
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cctype>
-#include <cmath>
 #include <charconv>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
 
 #include "camera/camera_model.h"
+#include "config/modes.h"
 #include "core/error.h"
 
 namespace fs = std::filesystem;
@@ -25,8 +26,6 @@ constexpr double kOrthonormalTolerance = 1e-14;
 /// Beyond this it is refused: Kalibr and VINS-Fusion's shipped configs are orthonormal to 1e-12,
 /// and 1e-3 off cost 0.17 m of ATE on a 60 s street.
 constexpr double kOrthonormalRefused = 1e-6;
-
-constexpr const char* kModeNames[] = {"baseline", "ransac", "seg", "idy", "idy-pre", "idy-ba"};
 
 /// YAML document with its file name, for messages with line numbers.
 struct YamlFile {
@@ -59,14 +58,14 @@ YamlFile loadYaml(const std::string& path) {
     if (!kv.first.IsScalar()) continue;
     const auto [it, fresh] = first_line.emplace(kv.first.Scalar(), lineOf(kv.first));
     if (!fresh)
-      throw InputError(path, lineOf(kv.first),
-                       "key '" + kv.first.Scalar() + "' written twice (first at line " + std::to_string(it->second) + ")");
+      throw InputError(
+          path, lineOf(kv.first),
+          "key '" + kv.first.Scalar() + "' written twice (first at line " + std::to_string(it->second) + ")");
   }
   return file;
 }
 
-YAML::Node require(const YamlFile& f, const YAML::Node& parent, const std::string& key,
-                   const std::string& what) {
+YAML::Node require(const YamlFile& f, const YAML::Node& parent, const std::string& key, const std::string& what) {
   if (parent && !parent.IsMap())  // a scalar or list where a map is expected (found by fuzzing)
     throw InputError(f.path, lineOf(parent), "expected a map with key '" + key + "' (" + what + ")");
   YAML::Node node = parent[key];
@@ -76,34 +75,27 @@ YAML::Node require(const YamlFile& f, const YAML::Node& parent, const std::strin
 }
 
 template <typename T>
-T scalarAs(const YamlFile& f, const YAML::Node& node, const std::string& key,
-           const char* expected) {
-  if (!node.IsScalar())
-    throw InputError(f.path, lineOf(node), "key '" + key + "': expected " + expected);
+T scalarAs(const YamlFile& f, const YAML::Node& node, const std::string& key, const char* expected) {
+  if (!node.IsScalar()) throw InputError(f.path, lineOf(node), "key '" + key + "': expected " + expected);
   try {
     return node.as<T>();
   } catch (const YAML::Exception&) {
-    throw InputError(f.path, lineOf(node),
-                     "key '" + key + "': expected " + expected + ", got '" + node.Scalar() + "'");
+    throw InputError(f.path, lineOf(node), "key '" + key + "': expected " + expected + ", got '" + node.Scalar() + "'");
   }
 }
 
-double getDouble(const YamlFile& f, const YAML::Node& parent, const std::string& key,
-                 const std::string& what) {
+double getDouble(const YamlFile& f, const YAML::Node& parent, const std::string& key, const std::string& what) {
   const YAML::Node node = require(f, parent, key, what);
   const double v = scalarAs<double>(f, node, key, "a number");
-  if (!std::isfinite(v))
-    throw InputError(f.path, lineOf(node), "key '" + key + "': expected a finite number");
+  if (!std::isfinite(v)) throw InputError(f.path, lineOf(node), "key '" + key + "': expected a finite number");
   return v;
 }
 
-int getInt(const YamlFile& f, const YAML::Node& parent, const std::string& key,
-           const std::string& what) {
+int getInt(const YamlFile& f, const YAML::Node& parent, const std::string& key, const std::string& what) {
   return scalarAs<int>(f, require(f, parent, key, what), key, "an integer");
 }
 
-std::string getString(const YamlFile& f, const YAML::Node& parent, const std::string& key,
-                      const std::string& what) {
+std::string getString(const YamlFile& f, const YAML::Node& parent, const std::string& key, const std::string& what) {
   return scalarAs<std::string>(f, require(f, parent, key, what), key, "a string");
 }
 
@@ -118,9 +110,8 @@ Eigen::Isometry3d getTransform(const YamlFile& f, const std::string& key) {
   const YAML::Node data = node["data"];
   if (rows != 4 || cols != 4 || data.size() != 16) {
     throw InputError(f.path, line,
-                     "key '" + key + "': expected a 4x4 matrix (16 values), got rows " +
-                         std::to_string(rows) + ", cols " + std::to_string(cols) + ", " +
-                         std::to_string(data.size()) + " values");
+                     "key '" + key + "': expected a 4x4 matrix (16 values), got rows " + std::to_string(rows) +
+                         ", cols " + std::to_string(cols) + ", " + std::to_string(data.size()) + " values");
   }
   Eigen::Matrix4d m;
   for (int i = 0; i < 16; ++i) m(i / 4, i % 4) = scalarAs<double>(f, data[i], key + ".data", "a number");
@@ -129,14 +120,15 @@ Eigen::Isometry3d getTransform(const YamlFile& f, const std::string& key) {
   if (const double off = (r * r.transpose() - Eigen::Matrix3d::Identity()).norm(); off > kOrthonormalRefused) {
     std::ostringstream o;
     o << off;
-    throw InputError(f.path, line, "key '" + key + "': rotation block not orthonormal (|R R^T - I| = " + o.str() +
-                                       ", expected below 1e-6: digits lost or a wrong value?)");
-  }
-  if (r.determinant() < 0.0 ||
-      (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9) {
     throw InputError(f.path, line,
-                     "key '" + key + "': expected a rigid transform (rotation block orthonormal "
-                     "with det +1, last row 0 0 0 1)");
+                     "key '" + key + "': rotation block not orthonormal (|R R^T - I| = " + o.str() +
+                         ", expected below 1e-6: digits lost or a wrong value?)");
+  }
+  if (r.determinant() < 0.0 || (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9) {
+    throw InputError(f.path, line,
+                     "key '" + key +
+                         "': expected a rigid transform (rotation block orthonormal "
+                         "with det +1, last row 0 0 0 1)");
   }
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.linear() = r;
@@ -150,24 +142,6 @@ Eigen::Isometry3d getTransform(const YamlFile& f, const std::string& key) {
 }
 
 }  // namespace
-
-const char* toString(Mode mode) { return kModeNames[static_cast<int>(mode)]; }
-
-bool parseMode(const std::string& text, Mode& mode) {
-  for (int i = 0; i < 6; ++i) {
-    if (text == kModeNames[i]) {
-      mode = static_cast<Mode>(i);
-      return true;
-    }
-  }
-  return false;
-}
-
-std::string modeNames() {
-  std::string s;
-  for (const char* n : kModeNames) s += (s.empty() ? "" : "|") + std::string(n);
-  return s;
-}
 
 // The readers proper; loadCameraFile and loadConfig wrap them.
 camera::CameraParams readCameraFile(const std::string& path);
@@ -215,8 +189,7 @@ camera::CameraParams readCameraFile(const std::string& path) {
     cam.cy = getDouble(f, p, "cy", "projection_parameters");
   } else if (model == "KANNALA_BRANDT") {
     cam.type = camera::ModelType::kKannalaBrandt;
-    const YAML::Node p = require(f, f.root, "projection_parameters",
-                                 "map with k2 k3 k4 k5 mu mv u0 v0");
+    const YAML::Node p = require(f, f.root, "projection_parameters", "map with k2 k3 k4 k5 mu mv u0 v0");
     const char* dk[] = {"k2", "k3", "k4", "k5"};
     for (int i = 0; i < 4; ++i) cam.dist[i] = getDouble(f, p, dk[i], "projection_parameters");
     cam.fx = getDouble(f, p, "mu", "projection_parameters");
@@ -231,9 +204,9 @@ camera::CameraParams readCameraFile(const std::string& path) {
   // the principal point inside the image.
   const double max_f = 100.0 * std::max(cam.width, cam.height);
   if (!(cam.fx > 0 && cam.fy > 0 && cam.fx <= max_f && cam.fy <= max_f))
-    throw InputError(path, "expected focal lengths in (0, " + std::to_string(static_cast<int>(max_f)) +
-                               "] px for a " + std::to_string(cam.width) + "x" + std::to_string(cam.height) +
-                               " image, got " + std::to_string(cam.fx) + ", " + std::to_string(cam.fy));
+    throw InputError(path, "expected focal lengths in (0, " + std::to_string(static_cast<int>(max_f)) + "] px for a " +
+                               std::to_string(cam.width) + "x" + std::to_string(cam.height) + " image, got " +
+                               std::to_string(cam.fx) + ", " + std::to_string(cam.fy));
   if (!(cam.cx >= 0 && cam.cx <= cam.width && cam.cy >= 0 && cam.cy <= cam.height))
     throw InputError(path, "expected the principal point inside the " + std::to_string(cam.width) + "x" +
                                std::to_string(cam.height) + " image, got (" + std::to_string(cam.cx) + ", " +
@@ -253,10 +226,9 @@ void readCameras(const YamlFile& f, const std::string& path, Config& c) {
     c.cam_paths.push_back(cam_path.string());
     camera::CameraParams cam = loadCameraFile(cam_path.string());
     if (cam.width != c.image_width || cam.height != c.image_height) {
-      throw InputError(cam_path.string(),
-                       "image size " + std::to_string(cam.width) + "x" + std::to_string(cam.height) +
-                           " differs from the config's " + std::to_string(c.image_width) + "x" +
-                           std::to_string(c.image_height));
+      throw InputError(cam_path.string(), "image size " + std::to_string(cam.width) + "x" + std::to_string(cam.height) +
+                                              " differs from the config's " + std::to_string(c.image_width) + "x" +
+                                              std::to_string(c.image_height));
     }
     c.cams.push_back(cam);
     c.T_b_c.push_back(getTransform(f, "body_T_cam" + std::to_string(i)));
@@ -265,30 +237,48 @@ void readCameras(const YamlFile& f, const std::string& path, Config& c) {
 
 const char* ruleText(ParamRule rule) {
   switch (rule) {
-    case ParamRule::kPositive: return "a positive value";
-    case ParamRule::kNonNegative: return "a value >= 0";
-    case ParamRule::kOpenUnit: return "a value in (0, 1)";
-    case ParamRule::kFraction: return "a value in (0, 1]";
-    case ParamRule::kCorrelation: return "a value in [-1, 1]";
-    case ParamRule::kImuNoise: return "a plausible IMU noise value in (0, 10]";
-    case ParamRule::kGravity: return "a gravity magnitude in [9, 10.5]";
-    case ParamRule::kTimeOffset: return "a camera-IMU offset within 0.5 s (td is in seconds)";
-    case ParamRule::kAny: break;
+    case ParamRule::kPositive:
+      return "a positive value";
+    case ParamRule::kNonNegative:
+      return "a value >= 0";
+    case ParamRule::kOpenUnit:
+      return "a value in (0, 1)";
+    case ParamRule::kFraction:
+      return "a value in (0, 1]";
+    case ParamRule::kCorrelation:
+      return "a value in [-1, 1]";
+    case ParamRule::kImuNoise:
+      return "a plausible IMU noise value in (0, 10]";
+    case ParamRule::kGravity:
+      return "a gravity magnitude in [9, 10.5]";
+    case ParamRule::kTimeOffset:
+      return "a camera-IMU offset within 0.5 s (td is in seconds)";
+    case ParamRule::kAny:
+      break;
   }
   return "a number";
 }
 
 bool satisfies(double v, ParamRule rule) {
   switch (rule) {
-    case ParamRule::kPositive: return v > 0;
-    case ParamRule::kNonNegative: return v >= 0;
-    case ParamRule::kOpenUnit: return v > 0 && v < 1;
-    case ParamRule::kFraction: return v > 0 && v <= 1;
-    case ParamRule::kCorrelation: return v >= -1 && v <= 1;
-    case ParamRule::kImuNoise: return v > 0 && v <= 10;
-    case ParamRule::kGravity: return v >= 9 && v <= 10.5;
-    case ParamRule::kTimeOffset: return std::abs(v) <= 0.5;
-    case ParamRule::kAny: break;
+    case ParamRule::kPositive:
+      return v > 0;
+    case ParamRule::kNonNegative:
+      return v >= 0;
+    case ParamRule::kOpenUnit:
+      return v > 0 && v < 1;
+    case ParamRule::kFraction:
+      return v > 0 && v <= 1;
+    case ParamRule::kCorrelation:
+      return v >= -1 && v <= 1;
+    case ParamRule::kImuNoise:
+      return v > 0 && v <= 10;
+    case ParamRule::kGravity:
+      return v >= 9 && v <= 10.5;
+    case ParamRule::kTimeOffset:
+      return std::abs(v) <= 0.5;
+    case ParamRule::kAny:
+      break;
   }
   return true;
 }
@@ -323,29 +313,14 @@ class YamlLoader final : public ParamVisitor {
     if (!satisfies(v, k.rule)) {
       std::ostringstream got;
       got << v;
-      throw InputError(f_.path, lineOf(f_.root[k.name]),
-                       "key '" + std::string(k.name) + "': expected " + ruleText(k.rule) + " (" + k.unit +
-                           "), got " + got.str());
+      throw InputError(
+          f_.path, lineOf(f_.root[k.name]),
+          "key '" + std::string(k.name) + "': expected " + ruleText(k.rule) + " (" + k.unit + "), got " + got.str());
     }
     return v;
   }
   const YamlFile& f_;
 };
-
-/// The config's own keys beside the modules' structs: IMU noise and limits.
-void declareImuParams(ParamVisitor& v, Config& c) {
-  v.section("IMU noise (VINS-Fusion semantics, docs/conventions.md)");
-  v.param({"acc_n", "m/s^2, accelerometer noise of one sample", ParamRule::kImuNoise, c.use_imu}, c.imu.acc_n);
-  v.param({"gyr_n", "rad/s, gyroscope noise of one sample", ParamRule::kImuNoise, c.use_imu}, c.imu.gyr_n);
-  v.param({"acc_w", "m/s^3, accelerometer bias random walk", ParamRule::kImuNoise, c.use_imu}, c.imu.acc_w);
-  v.param({"gyr_w", "rad/s^2, gyroscope bias random walk", ParamRule::kImuNoise, c.use_imu}, c.imu.gyr_w);
-  v.param({"g_norm", "m/s^2, gravity magnitude", ParamRule::kGravity, c.use_imu}, c.imu.g_norm);
-  v.param({"imu_max_acc", "m/s^2, acceleration norm above which a sample is dropped (counted)", ParamRule::kPositive},
-          c.imu_max_acc_mps2);
-  v.param({"imu_max_gyr", "rad/s, angular rate norm above which a sample is dropped (counted)", ParamRule::kPositive},
-          c.imu_max_gyr_radps);
-  c.imu_spike.visit(v);
-}
 
 /// The mode, visited as its name.
 void declareModeParam(ParamVisitor& v, std::string& mode_name) {
@@ -367,7 +342,7 @@ void declareTopicParams(ParamVisitor& v, Config& c) {
 
 /// Every declared key, in the order saveConfig writes and describe prints them.
 void declareAll(ParamVisitor& v, Config& c, std::string& mode_name) {
-  declareImuParams(v, c);
+  c.imu.declareParams(v, c.use_imu);
   declareModeParam(v, mode_name);
   c.tracker.declareParams(v);
   c.estimator.declareParams(v);
@@ -392,13 +367,13 @@ void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
     throw InputError(f.path, "lambda_dy_c (" + std::to_string(c.idy.lambda_dy_c) + ") must not exceed lambda_dy (" +
                                  std::to_string(c.idy.lambda_dy) + ")");
   if (c.tracker.track_dropout_permille > 1000)
-    throw InputError(f.path, lineOf(f.root["track_dropout_permille"]),
-                     "key 'track_dropout_permille': expected 0 to 1000, got " +
-                         std::to_string(c.tracker.track_dropout_permille));
-  if (c.imu_spike.max_ms >= 1e3 * c.estimator.max_imu_gap_s) {  // a dropped spike leaves a gap to bridge
+    throw InputError(
+        f.path, lineOf(f.root["track_dropout_permille"]),
+        "key 'track_dropout_permille': expected 0 to 1000, got " + std::to_string(c.tracker.track_dropout_permille));
+  if (c.imu.spike.max_ms >= 1e3 * c.estimator.max_imu_gap_s) {  // a dropped spike leaves a gap to bridge
     const YAML::Node at = f.root["imu_spike_max_ms"] ? f.root["imu_spike_max_ms"] : f.root["max_imu_gap"];
     throw InputError(f.path, lineOf(at),
-                     "imu_spike_max_ms (" + shortNumber(c.imu_spike.max_ms) + ") must be below max_imu_gap (" +
+                     "imu_spike_max_ms (" + shortNumber(c.imu.spike.max_ms) + ") must be below max_imu_gap (" +
                          shortNumber(1e3 * c.estimator.max_imu_gap_s) + " ms): a dropped spike leaves a gap to bridge");
   }
   if (c.estimator.estimate_anchor_ray && c.estimator.estimate_td)
@@ -409,20 +384,21 @@ void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
     if (!table->empty() && fs::path(*table).is_relative()) *table = (folder / *table).string();
   for (const auto& [key, topic] : {std::pair<const char*, const std::string*>{"image1_topic", &c.image1_topic},
                                    {"segmentation_topic", &c.segmentation_topic}})
-    for (const auto& [other, other_topic] : {std::pair<const char*, const std::string*>{"image0_topic", &c.image0_topic},
-                                             {"image1_topic", &c.image1_topic}})
+    for (const auto& [other, other_topic] :
+         {std::pair<const char*, const std::string*>{"image0_topic", &c.image0_topic},
+          {"image1_topic", &c.image1_topic}})
       if (key != std::string(other) && !topic->empty() && *topic == *other_topic)
-        throw InputError(f.path, lineOf(f.root[key] ? f.root[key] : f.root[other]),
-                         std::string(key) + " and " + other + " are the same topic '" + *topic +
-                             "': each stream needs its own");
+        throw InputError(
+            f.path, lineOf(f.root[key] ? f.root[key] : f.root[other]),
+            std::string(key) + " and " + other + " are the same topic '" + *topic + "': each stream needs its own");
   if (!c.segmentation_topic.empty() && (c.segmentation_rgb_ids.empty() || c.segmentation_vehicle_ids.empty()))
     throw InputError(f.path, lineOf(f.root["segmentation_topic"]),
                      "segmentation_topic needs segmentation_rgb_ids and segmentation_vehicle_ids (VIODE's tables)");
 }
 
 /// The rig's keys, read beside the declared ones.
-const std::vector<std::string> kRigKeys = {"imu",         "num_of_cam",  "image_width", "image_height",
-                                           "cam0_calib",  "cam1_calib",  "body_T_cam0", "body_T_cam1"};
+const std::vector<std::string> kRigKeys = {"imu",        "num_of_cam", "image_width", "image_height",
+                                           "cam0_calib", "cam1_calib", "body_T_cam0", "body_T_cam1"};
 
 /// VINS-Fusion's keys that idyvins reads past without using, and why.
 const std::vector<std::pair<std::string, std::string>> kVinsKeysNotUsed = {
@@ -458,7 +434,8 @@ std::size_t editDistance(const std::string& a, const std::string& b) {
     row[0] = i;
     for (std::size_t j = 1; j <= b.size(); ++j) {
       const std::size_t up = row[j];
-      const bool same = std::tolower(static_cast<unsigned char>(a[i - 1])) == std::tolower(static_cast<unsigned char>(b[j - 1]));
+      const bool same =
+          std::tolower(static_cast<unsigned char>(a[i - 1])) == std::tolower(static_cast<unsigned char>(b[j - 1]));
       row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (same ? 0 : 1)});
       diag = up;
     }
@@ -476,12 +453,13 @@ void warnAboutKeys(const YamlFile& f, Config& c) {
     if (!kv.first.IsScalar()) continue;
     const std::string key = kv.first.Scalar();
     if (std::find(known.begin(), known.end(), key) != known.end()) continue;
-    const auto vins = std::find_if(kVinsKeysNotUsed.begin(), kVinsKeysNotUsed.end(),
-                                   [&](const auto& k) { return k.first == key; });
+    const auto vins =
+        std::find_if(kVinsKeysNotUsed.begin(), kVinsKeysNotUsed.end(), [&](const auto& k) { return k.first == key; });
     if (vins != kVinsKeysNotUsed.end()) {
       if (key == "estimate_extrinsic" && kv.second.IsScalar() && kv.second.Scalar() != "0")
-        c.warnings.push_back(f.path + ":" + std::to_string(lineOf(kv.first)) + ": estimate_extrinsic: " +
-                             kv.second.Scalar() + " is not honoured: idyvins keeps body_T_cam0/1 as written (an error "
+        c.warnings.push_back(f.path + ":" + std::to_string(lineOf(kv.first)) +
+                             ": estimate_extrinsic: " + kv.second.Scalar() +
+                             " is not honoured: idyvins keeps body_T_cam0/1 as written (an error "
                              "of a degree or a centimetre there costs accuracy)");
       else if (key != "estimate_extrinsic")
         unused += (unused.empty() ? "" : ", ") + key + " (" + vins->second + ")";
@@ -494,11 +472,11 @@ void warnAboutKeys(const YamlFile& f, Config& c) {
     c.warnings.push_back(f.path + ":" + std::to_string(lineOf(kv.first)) + ": unknown key '" + key + "' ignored" +
                          (nearest.empty() ? " (docs/cli.md lists the keys)" : "; did you mean '" + nearest + "'?"));
   }
-  if (!unused.empty())
-    c.warnings.push_back(f.path + ": VINS-Fusion keys read but not used by idyvins: " + unused);
+  if (!unused.empty()) c.warnings.push_back(f.path + ": VINS-Fusion keys read but not used by idyvins: " + unused);
 }
 
-/// Plausibility of the rig beyond each key's own rule: the stereo baseline and the lens distortion (a unit or sign error makes each of them absurd).
+/// Plausibility of the rig beyond each key's own rule: the stereo baseline and the lens distortion (a unit or sign
+/// error makes each of them absurd).
 void checkRig(const YamlFile& f, const Config& c) {
   if (c.cams.size() == 2) {
     const Eigen::Vector3d t = (c.T_b_c[0].inverse() * c.T_b_c[1]).translation();  // cam1 in cam0's frame
@@ -509,8 +487,9 @@ void checkRig(const YamlFile& f, const Config& c) {
                            (b > 3.0 ? "(translations in millimetres?)" : "(body_T_cam1 equal to body_T_cam0?)"));
     if (t.x() < 0 && std::abs(t.x()) > std::max(std::abs(t.y()), std::abs(t.z())))
       throw InputError(f.path, lineOf(f.root["body_T_cam1"]),
-                       "cam1 lies " + shortNumber(-t.x()) + " m to the left of cam0: idyvins expects cam0 left, cam1 "
-                       "right (body_T_cam0 and body_T_cam1 swapped?)");
+                       "cam1 lies " + shortNumber(-t.x()) +
+                           " m to the left of cam0: idyvins expects cam0 left, cam1 "
+                           "right (body_T_cam0 and body_T_cam1 swapped?)");
   }
   for (std::size_t i = 0; i < c.cams.size(); ++i) {
     // The image corner lifted to the normalized plane and compared with its undistorted guess:
@@ -561,127 +540,11 @@ Config readConfig(const std::string& path, std::vector<std::string>* keys_read) 
   return c;
 }
 
-namespace {
-
-/// The shortest decimal text that reads back as the same double.
-std::string number(double v) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
-  return std::string(buf, r.ptr);
-}
-
-std::string matrixYaml(const Eigen::Matrix4d& m) {
-  std::string s = " !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: d\n   data: [";
-  for (int i = 0; i < 16; ++i) s += (i ? ", " : "") + number(m(i / 4, i % 4));
-  return s + "]\n";
-}
-
-void writeFile(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  if (!out) throw InputError(path, "cannot write file");
-}
-
-/// "key: value" lines of every declared key under "# section" lines; strings quoted. Given
-/// the defaults' values (`skip`), a key that is not required and has its default value is left
-/// out, and so is a section left empty.
-class KeyPrinter final : public ParamVisitor {
- public:
-  explicit KeyPrinter(std::string indent, const std::map<std::string, std::string>* skip = nullptr)
-      : indent_(std::move(indent)), skip_(skip) {}
-  void section(const char* title) override { pending_section_ = "\n" + indent_ + "# " + title + "\n"; }
-  void param(const ParamKey& k, double& v) override { add(k, number(v)); }
-  void param(const ParamKey& k, int& v) override { add(k, std::to_string(v)); }
-  void param(const ParamKey& k, bool& v) override { add(k, v ? "1" : "0"); }
-  void param(const ParamKey& k, std::string& v) override { add(k, "\"" + v + "\""); }
-  std::string text;
-  std::map<std::string, std::string> values;  ///< key -> its text, every key visited
-
- private:
-  void add(const ParamKey& k, const std::string& value) {
-    values[k.name] = value;
-    if (skip_ && !k.required) {
-      const auto it = skip_->find(k.name);
-      if (it != skip_->end() && it->second == value) return;
-    }
-    text += pending_section_ + indent_ + k.name + ": " + value + "\n";
-    pending_section_.clear();
-  }
-  std::string indent_;
-  const std::map<std::string, std::string>* skip_;
-  std::string pending_section_;
-};
-
-/// Every declared key of `c` as KeyPrinter lines (with `skip`: only the ones that differ).
-std::string keyLines(const Config& c, const std::string& indent,
-                     const std::map<std::string, std::string>* skip = nullptr) {
-  Config copy = c;  // visitors take references; printing changes nothing
-  std::string mode_name = toString(c.mode);
-  KeyPrinter printer(indent, skip);
-  declareAll(printer, copy, mode_name);
-  return printer.text;
-}
-
-/// The comment line of a config saved with SavedKeys::kChanged.
-constexpr const char* kChangedKeysLine = "# Keys not written here have their defaults (docs/cli.md, Config keys)";
-
-/// Every key's text at its default value.
-std::map<std::string, std::string> defaultValues() {
-  Config c;
-  std::string mode_name = toString(c.mode);
-  KeyPrinter printer("");
-  declareAll(printer, c, mode_name);
-  return printer.values;
-}
-
-/// Markdown tables of every key: default and unit, one table per section.
-class KeyTable final : public ParamVisitor {
- public:
-  void section(const char* title) override {
-    text += std::string(text.empty() ? "" : "\n") + "**" + title + "**\n\n| key | default | unit and meaning |\n| --- | --- | --- |\n";
-  }
-  void param(const ParamKey& k, double& v) override { add(k, number(v)); }
-  void param(const ParamKey& k, int& v) override { add(k, std::to_string(v)); }
-  void param(const ParamKey& k, bool& v) override { add(k, v ? "1" : "0"); }
-  void param(const ParamKey& k, std::string& v) override { add(k, v.empty() ? "(none)" : "`" + v + "`"); }
-  std::string text;
-
- private:
-  void add(const ParamKey& k, const std::string& value) {
-    text += "| `" + std::string(k.name) + "` | " + (k.required ? "required" : value) + " | " + k.unit + " |\n";
-  }
-};
-
-}  // namespace
-
-std::string describe(const Config& c) {
-  std::ostringstream o;
-  o << "config: " << c.path << "\n";
-  o << "  imu: " << (c.use_imu ? 1 : 0) << ", num_of_cam: " << c.num_cam << ", image_width: " << c.image_width
-    << ", image_height: " << c.image_height << "\n";
-  for (std::size_t i = 0; i < c.cams.size(); ++i) {
-    const auto& k = c.cams[i];
-    o << "  cam" << i << "_calib: " << c.cam_paths[i] << " (" << camera::toString(k.type) << " f=(" << k.fx << ", "
-      << k.fy << ") c=(" << k.cx << ", " << k.cy << ") dist=[" << k.dist[0] << ", " << k.dist[1] << ", " << k.dist[2]
-      << ", " << k.dist[3] << "])\n";
-    const Eigen::Vector3d t = c.T_b_c[i].translation();
-    o << "  body_T_cam" << i << ": t = [" << t.transpose() << "] m\n";
-  }
-  if (c.cams.size() == 2) {
-    const Eigen::Isometry3d T_c0_c1 = c.T_b_c[0].inverse() * c.T_b_c[1];
-    o << "  stereo baseline: " << T_c0_c1.translation().norm() << " m\n";
-  }
-  o << keyLines(c, "  ").substr(1);
-  o << "  (max_solver_time "
-    << (c.estimator.time_limited ? "applied: solver_time_limit 1, results depend on load" : "not applied: deterministic")
-    << ")\n";
-  return o.str();
-}
-
 void declareParams(ParamVisitor& visitor, Config& c) {
   std::string mode_name = toString(c.mode);
   declareAll(visitor, c, mode_name);
-  if (!parseMode(mode_name, c.mode)) throw InputError("mode", "expected one of " + modeNames() + ", got '" + mode_name + "'");
+  if (!parseMode(mode_name, c.mode))
+    throw InputError("mode", "expected one of " + modeNames() + ", got '" + mode_name + "'");
 }
 
 std::vector<std::string> declaredKeyNames() {
@@ -690,66 +553,6 @@ std::vector<std::string> declaredKeyNames() {
   KeyNames names;
   declareAll(names, c, mode_name);
   return names.names;
-}
-
-std::string keyTable() {
-  Config c;
-  std::string mode_name = toString(c.mode);
-  KeyTable table;
-  declareAll(table, c, mode_name);
-  return table.text;
-}
-
-void saveCameraFile(const camera::CameraParams& k, const std::string& path) {
-  std::string s = "%YAML:1.0\n---\n";
-  const bool pinhole = k.type == camera::ModelType::kPinhole;
-  s += std::string("model_type: ") + (pinhole ? "PINHOLE" : "KANNALA_BRANDT") + "\n";
-  s += "camera_name: " + (k.name.empty() ? std::string("camera") : k.name) + "\n";
-  s += "image_width: " + std::to_string(k.width) + "\nimage_height: " + std::to_string(k.height) + "\n";
-  const char* dk[] = {"k1", "k2", "p1", "p2"};
-  const char* kb[] = {"k2", "k3", "k4", "k5"};
-  if (pinhole) {
-    s += "distortion_parameters:\n";
-    for (int i = 0; i < 4; ++i) s += std::string("   ") + dk[i] + ": " + number(k.dist[i]) + "\n";
-    s += "projection_parameters:\n   fx: " + number(k.fx) + "\n   fy: " + number(k.fy) + "\n   cx: " + number(k.cx) +
-         "\n   cy: " + number(k.cy) + "\n";
-  } else {
-    s += "projection_parameters:\n";
-    for (int i = 0; i < 4; ++i) s += std::string("   ") + kb[i] + ": " + number(k.dist[i]) + "\n";
-    s += "   mu: " + number(k.fx) + "\n   mv: " + number(k.fy) + "\n   u0: " + number(k.cx) + "\n   v0: " +
-         number(k.cy) + "\n";
-  }
-  writeFile(path, s);
-}
-
-void saveConfig(const Config& c, const std::string& path, SavedKeys keys) {
-  const fs::path folder = fs::path(path).parent_path();
-  std::string s = "%YAML:1.0\n# idyvins config (VINS-Fusion format)\n";
-  s += "imu: " + std::to_string(c.use_imu ? 1 : 0) + "\nnum_of_cam: " + std::to_string(c.num_cam) + "\n";
-  for (int i = 0; i < c.num_cam; ++i) {
-    const std::string name = i < static_cast<int>(c.cam_paths.size()) && !c.cam_paths[i].empty()
-                                 ? fs::path(c.cam_paths[i]).filename().string()
-                                 : "cam" + std::to_string(i) + ".yaml";
-    saveCameraFile(c.cams.at(i), (folder / name).string());
-    s += "cam" + std::to_string(i) + "_calib: \"" + name + "\"\n";
-  }
-  s += "image_width: " + std::to_string(c.image_width) + "\nimage_height: " + std::to_string(c.image_height) + "\n";
-  s += "# VINS-Fusion's key, for its readers: idyvins keeps the extrinsics fixed\nestimate_extrinsic: 0\n";
-  for (int i = 0; i < c.num_cam; ++i) s += "body_T_cam" + std::to_string(i) + ":" + matrixYaml(c.T_b_c.at(i).matrix());
-  if (keys == SavedKeys::kChanged) {
-    const std::map<std::string, std::string> defaults = defaultValues();
-    s += std::string(kChangedKeysLine) + "\n" + keyLines(c, "", &defaults);
-  } else {
-    s += keyLines(c, "");
-  }
-  writeFile(path, s);
-}
-
-bool savedWithChangedKeysOnly(const std::string& path) {
-  std::ifstream in(path);
-  for (std::string line; std::getline(in, line);)
-    if (line == kChangedKeysLine) return true;
-  return false;
 }
 
 }  // namespace idyvins

@@ -11,11 +11,11 @@
 #include "backend/estimator_options.h"
 #include "camera/camera_params.h"
 #include "camera/rig.h"
-#include "map/loop_options.h"
 #include "core/measurements.h"
 #include "dynamic/idy_options.h"
 #include "frontend/tracker_params.h"
-#include "imu/spike_gate.h"
+#include "imu/imu_options.h"
+#include "map/loop_options.h"
 
 namespace idyvins {
 
@@ -39,17 +39,12 @@ struct Config {
   std::vector<camera::CameraParams> cams;  ///< cam0 (left), cam1 (right)
   std::vector<std::string> cam_paths;      ///< resolved camodocal file paths
   std::vector<Eigen::Isometry3d> T_b_c;    ///< body_T_camX: maps camera points into the body
-  ImuNoise imu;
-  /// IMU samples beyond these (or not finite) are dropped and counted (pipeline::Summary):
-  /// a robot must live through a few impossible samples. Defaults: 16 g, 35 rad/s.
-  double imu_max_acc_mps2 = 16 * 9.80665;
-  double imu_max_gyr_radps = 35.0;
-  imu::SpikeGateOptions imu_spike;   ///< short spikes within those limits, dropped (imu/spike_gate.h)
-  Mode mode = Mode::kIdy;            ///< `mode`; what it switches on: pipeline/modes.h
-  frontend::TrackerParams tracker;   ///< feature tracker keys
-  backend::EstimatorOptions estimator;  ///< solver, time offset and measurement-model keys
-  dynamic::IdyOptions idy;           ///< the paper's method and the dynamic-scene tests
-  map::LoopOptions loop;             ///< loop closure (off unless loop_closure: 1)
+  imu::ImuOptions imu;                     ///< IMU noise, limits, spike gate
+  Mode mode = Mode::kIdy;                  ///< `mode`; what it switches on: config/modes.h
+  frontend::TrackerParams tracker;         ///< feature tracker keys
+  backend::EstimatorOptions estimator;     ///< solver, time offset and measurement-model keys
+  dynamic::IdyOptions idy;                 ///< the paper's method and the dynamic-scene tests
+  map::LoopOptions loop;                   ///< loop closure (off unless loop_closure: 1)
   /// Bag topics (VINS-Fusion's keys imu_topic, image0_topic, image1_topic; idyvins'
   /// groundtruth_topic, empty = none). Used when the dataset is a ROS1 bag.
   std::string imu_topic = "/imu0", image0_topic = "/cam0/image_raw", image1_topic = "/cam1/image_raw";
@@ -107,7 +102,7 @@ void saveConfig(const Config& config, const std::string& path, SavedKeys keys = 
 
 /// Whether the config at `path` was written with SavedKeys::kChanged (its comment line says
 /// so); false for a config saved with every key, which pins the defaults of the day it was
-/// written (the simulator's configs before 2026-11-28), and for one that cannot be read.
+/// written (the simulator's configs of earlier versions), and for one that cannot be read.
 bool savedWithChangedKeysOnly(const std::string& path);
 
 /// Writes a camodocal camera file (PINHOLE or KANNALA_BRANDT) loadCameraFile reads back exactly.
