@@ -101,7 +101,8 @@ class Estimator {
   void storeRays();
   /// Recomputes every candidate weight from the current poses.
   void refreshWeights(std::deque<CandidateWeight>& weights) const;
-  /// Moves the window back so that its oldest frame keeps its yaw and position (backend/gauge.h).
+  /// Moves the window (yaw and position, backend/gauge.h) so that its oldest frame has those of
+  /// `T_w_b0_before`: after a solve its own from before it, after a reset the predicted one.
   void restoreGauge(const Eigen::Isometry3d& T_w_b0_before);
   void removeOutliers(FrameResult& result);
   /// EstimatorOptions::stereo_outlier_px: right observations that do not fit their landmark.

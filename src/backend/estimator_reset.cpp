@@ -74,15 +74,7 @@ std::string Estimator::reanchor() {
   Isometry3d T_pred = Isometry3d::Identity();
   T_pred.linear() = s.q_w_b.toRotationMatrix();
   T_pred.translation() = s.p_w_b;
-  const Isometry3d T_corr = gaugeCorrection(T_pred, w_.frames[0].T_w_b());
-  const Quaterniond q_corr(T_corr.linear());
-  for (int k = 0; k <= w_.count; ++k) {
-    imu::NavState f = w_.frames[k].nav();
-    f.p_w_b = T_corr * f.p_w_b;
-    f.q_w_b = (q_corr * f.q_w_b).normalized();
-    f.v_w = q_corr * f.v_w;
-    w_.frames[k].setNav(f);
-  }
+  restoreGauge(T_pred);  // the window moved (yaw and position) so that its oldest frame is there
   return held ? "held" : extrapolated ? "extrapolated" : "imu";
 }
 }  // namespace idyvins::backend
