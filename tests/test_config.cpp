@@ -172,7 +172,7 @@ TEST(Config, SavingOnlyChangedKeysLeavesDefaultsToTheCode) {
   // dataset rendered before (one home per parameter): the required keys and the changed ones.
   test::TempDir dir;
   Config c = loadConfig(configPath("sim/sim_stereo_imu_config.yaml"));
-  c.tracker.stereo_refine = !frontend::TrackerParams{}.stereo_refine;
+  c.tracker.stereo_refine = frontend::TrackerParams{}.stereo_refine == 0 ? 2 : 0;
   saveConfig(c, dir / "changed.yaml", SavedKeys::kChanged);
   const std::string file = test::readFile(dir / "changed.yaml");
   EXPECT_NE(file.find("\nstereo_refine: "), std::string::npos);
@@ -370,7 +370,7 @@ TEST(Config, TrackerImageKeys) {
   EXPECT_FALSE(plain.tracker.equalize);
   EXPECT_TRUE(plain.tracker.stereo_gain_compensation);
   EXPECT_DOUBLE_EQ(plain.tracker.stereo_epipolar_px, 2.0);
-  EXPECT_FALSE(plain.tracker.stereo_refine);
+  EXPECT_EQ(plain.tracker.stereo_refine, 0);
   const Config set = loadConfig(writeConfig(
       dir,
       std::string(kConfig) + "equalize: 1\nstereo_gain_compensation: 0\nstereo_epipolar_px: 1.0\nstereo_refine: 1\n",
@@ -378,14 +378,17 @@ TEST(Config, TrackerImageKeys) {
   EXPECT_TRUE(set.tracker.equalize);
   EXPECT_FALSE(set.tracker.stereo_gain_compensation);
   EXPECT_DOUBLE_EQ(set.tracker.stereo_epipolar_px, 1.0);
-  EXPECT_TRUE(set.tracker.stereo_refine);
+  EXPECT_EQ(set.tracker.stereo_refine, 1);
+  EXPECT_EQ(loadWith(dir, "stereo_refine: 2\n").tracker.stereo_refine, 2);
   expectError([&] { loadWith(dir, "stereo_refine: yes\n"); }, "stereo_refine");
+  expectError([&] { loadWith(dir, "stereo_refine: 3\n"); }, "expected 0 (off), 1 (affine) or 2 (translation)");
+  expectError([&] { loadWith(dir, "stereo_refine: -1\n"); }, "stereo_refine");
   expectError([&] { loadWith(dir, "stereo_epipolar_px: 0\n"); }, "stereo_epipolar_px");
   expectError([&] { loadWith(dir, "equalize: clahe\n"); }, "equalize");
   const Config euroc = loadConfig(std::string(IDYVINS_SOURCE_DIR) + "/config/euroc/euroc_stereo_imu_config.yaml");
   EXPECT_TRUE(euroc.tracker.equalize) << "measured on the real excerpt (test_frontend)";
   EXPECT_DOUBLE_EQ(euroc.tracker.stereo_epipolar_px, 1.0);
-  EXPECT_TRUE(euroc.tracker.stereo_refine) << "measured on the real excerpt (test_frontend)";
+  EXPECT_EQ(euroc.tracker.stereo_refine, 1) << "measured on the real excerpt (test_frontend)";
 }
 
 TEST(Config, BadValuesNameKeyAndLine) {

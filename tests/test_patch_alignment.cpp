@@ -62,6 +62,35 @@ TEST(PatchAlignment, IsInvariantToGainAndBias) {
   EXPECT_GT(r.zncc, 0.98);
 }
 
+TEST(PatchAlignment, TranslationModelFindsTheShiftUnderAGainAndOffsetAndKeepsA) {
+  // A right view: the same texture shifted by a disparity, darker and offset (the
+  // left/right gain difference a global compensation leaves). The translation model moves
+  // only t; A stays the initial guess's. Once with the whole patch, once with a patch cut by
+  // the image border (the masked step solves the same model).
+  const cv::Mat image0 = texture(6);
+  AlignOptions o;
+  o.model = WarpModel::kTranslation;
+  o.epsilon_px = 1e-3;
+  o.max_iterations = 30;
+  o.min_inside = 0.5;
+  for (const bool cut : {false, true}) {
+    const Eigen::Vector2d c = cut ? Eigen::Vector2d(4.3, 98.6) : Eigen::Vector2d(101.3, 98.6);
+    const Eigen::Vector2d shift(cut ? 7.0 : -7.0, 0.0);  // whole pixels: the view is not resampled
+    const PatchTemplate tmpl = makePatchTemplate(image0, c, 7, 0.5);
+    ASSERT_TRUE(tmpl.valid);
+    ASSERT_EQ(tmpl.inside.empty(), !cut);
+    cv::Mat right;
+    warped(image0, Eigen::Matrix2d::Identity(), c, shift).convertTo(right, CV_8U, 0.85, 12.0);
+    AffineWarp warp;
+    warp.t = c + shift + Eigen::Vector2d(0.6, -0.4);  // KLT's match, off by a fraction of a pixel
+    const AlignResult r = alignAffine(tmpl, right, warp, o);
+    ASSERT_TRUE(r.converged) << (cut ? "cut" : "whole");
+    EXPECT_LT((warp.t - (c + shift)).norm(), 0.01) << (cut ? "cut" : "whole");
+    EXPECT_TRUE(warp.A.isApprox(Eigen::Matrix2d::Identity())) << (cut ? "cut" : "whole");
+    EXPECT_GT(r.zncc, 0.99);
+  }
+}
+
 TEST(PatchAlignment, ReportsAPatchThatNoLongerMatches) {
   const cv::Mat image0 = texture(3), other = texture(4);
   const Eigen::Vector2d c(100, 100);

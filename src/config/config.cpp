@@ -370,6 +370,10 @@ void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
     throw InputError(
         f.path, lineOf(f.root["track_dropout_permille"]),
         "key 'track_dropout_permille': expected 0 to 1000, got " + std::to_string(c.tracker.track_dropout_permille));
+  if (c.tracker.stereo_refine > 2)
+    throw InputError(f.path, lineOf(f.root["stereo_refine"]),
+                     "key 'stereo_refine': expected 0 (off), 1 (affine) or 2 (translation), got " +
+                         std::to_string(c.tracker.stereo_refine));
   if (c.imu.spike.max_ms >= 1e3 * c.estimator.max_imu_gap_s) {  // a dropped spike leaves a gap to bridge
     const YAML::Node at = f.root["imu_spike_max_ms"] ? f.root["imu_spike_max_ms"] : f.root["max_imu_gap"];
     throw InputError(f.path, lineOf(at),

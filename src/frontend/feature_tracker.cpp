@@ -304,6 +304,17 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
   }
 }
 
+void FeatureTracker::refineRight(const cv::Mat& left, const Eigen::Vector2d& uv, cv::Point2f& uv_right) const {
+  const PatchTemplate tmpl = makePatchTemplate(left, uv, params_.patch_half, params_.patch_min_inside);
+  AffineWarp warp;
+  warp.t = toEigen(uv_right);
+  AlignOptions align = alignOptions();
+  if (params_.stereo_refine == 2) align.model = WarpModel::kTranslation;
+  if (tmpl.valid && alignAffine(tmpl, right_pyr_[0], warp, align).converged &&
+      (warp.t - toEigen(uv_right)).norm() < 1.0)
+    uv_right = cv::Point2f(static_cast<float>(warp.t.x()), static_cast<float>(warp.t.y()));
+}
+
 void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vector<Feature>& features,
                                 const std::vector<std::size_t>* which) {
   if (!has_right_image_) return;
@@ -338,14 +349,7 @@ void FeatureTracker::matchRight(const std::vector<cv::Mat>& left_pyr, std::vecto
     feat.has_right = feat.right_low_zncc = false;
     bool ok = status[i] != 0;
     if (ok && params_.flow_back) ok = status_back[i] && cv::norm(back[i] - pl[i]) <= params_.flow_back_px;
-    if (ok && params_.stereo_refine) {
-      const PatchTemplate tmpl = makePatchTemplate(left_pyr[0], feat.uv, params_.patch_half, params_.patch_min_inside);
-      AffineWarp warp;
-      warp.t = toEigen(pr[i]);
-      if (tmpl.valid && alignAffine(tmpl, right_pyr[0], warp, alignOptions()).converged &&
-          (warp.t - toEigen(pr[i])).norm() < 1.0)
-        pr[i] = cv::Point2f(static_cast<float>(warp.t.x()), static_cast<float>(warp.t.y()));
-    }
+    if (ok && params_.stereo_refine != 0) refineRight(left_pyr[0], feat.uv, pr[i]);
     Eigen::Vector2d xy_r;
     if (!ok || !cams_[1]->liftToNormalized(toEigen(pr[i]), xy_r)) continue;
     // Epipolar check with the known extrinsics (distance to the line, in pixels).

@@ -115,6 +115,9 @@ class FeatureTracker {
   /// left position on klt_max_level + 1 levels, backward check, epipolar and ZNCC checks.
   void matchRight(const std::vector<cv::Mat>& left_pyr, std::vector<Feature>& features,
                   const std::vector<std::size_t>* which = nullptr);
+  /// stereo_refine: moves `uv_right` to where the left patch at `uv` aligns in the right
+  /// image (full resolution), when that converges within 1 px of it.
+  void refineRight(const cv::Mat& left, const Eigen::Vector2d& uv, cv::Point2f& uv_right) const;
   bool inBorder(const cv::Point2f& p) const;
   AlignOptions alignOptions() const;  ///< first-patch alignment with params_.patch_min_inside
 

@@ -188,6 +188,7 @@ PatchTemplate makePatchTemplate(const cv::Mat& image, const Eigen::Vector2d& uv_
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
   if (!wellConditioned(ldlt)) return tmpl;
   tmpl.H_inv = ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity());
+  tmpl.H_translation_inv = H.bottomRightCorner<2, 2>().inverse();
   tmpl.valid = true;
   return tmpl;
 }
@@ -235,7 +236,7 @@ bool warpPatch(const cv::Mat& image, const AffineWarp& warp, int half, std::vect
 
 /// One Gauss-Newton step of a whole template whose warped patch lies in the image (the
 /// precomputed inverse Hessian): false when the warped patch is flat.
-bool stepWhole(const PatchTemplate& tmpl, std::vector<float>& warped, Eigen::Matrix<double, 6, 1>& dp,
+bool stepWhole(const PatchTemplate& tmpl, WarpModel model, std::vector<float>& warped, Eigen::Matrix<double, 6, 1>& dp,
                double& zncc_out) {
   const std::size_t count = tmpl.values.size();
   // Normalize (zero mean, unit norm), then the error against the template and the
@@ -262,7 +263,30 @@ bool stepWhole(const PatchTemplate& tmpl, std::vector<float>& warped, Eigen::Mat
     for (int k = 0; k < 6; ++k) b[k] += sd[k] * e;
   }
   zncc_out = zncc;
-  dp = tmpl.H_inv * Eigen::Map<const Eigen::Matrix<float, 6, 1>>(b).cast<double>();
+  const Eigen::Matrix<double, 6, 1> bd = Eigen::Map<const Eigen::Matrix<float, 6, 1>>(b).cast<double>();
+  if (model == WarpModel::kTranslation) {
+    dp.setZero();
+    dp.tail<2>() = tmpl.H_translation_inv * bd.tail<2>();
+  } else {
+    dp = tmpl.H_inv * bd;
+  }
+  return true;
+}
+
+/// The Gauss-Newton step of `model` from the normal equations H dp = b (the affine
+/// parameters then the translation); false when H is singular in those parameters.
+bool solveStep(const Eigen::Matrix<double, 6, 6>& H, const Eigen::Matrix<double, 6, 1>& b, WarpModel model,
+               Eigen::Matrix<double, 6, 1>& dp) {
+  if (model == WarpModel::kTranslation) {
+    const Eigen::Matrix2d Ht = H.bottomRightCorner<2, 2>();
+    if (!(Ht.determinant() > 1e-9 * Ht.squaredNorm())) return false;
+    dp.setZero();
+    dp.tail<2>() = Ht.inverse() * b.tail<2>();
+    return true;
+  }
+  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
+  if (!wellConditioned(ldlt)) return false;
+  dp = ldlt.solve(b);
   return true;
 }
 
@@ -270,8 +294,8 @@ bool stepWhole(const PatchTemplate& tmpl, std::vector<float>& warped, Eigen::Mat
 /// warped position is in the image (a patch at the border): both sides normalized over
 /// those pixels, the Hessian built from them. False when too few remain or either side
 /// is flat or without texture in both directions.
-bool stepMasked(const PatchTemplate& tmpl, const cv::Mat& image, const AffineWarp& warp, double min_inside,
-                Eigen::Matrix<double, 6, 1>& dp, double& zncc_out) {
+bool stepMasked(const PatchTemplate& tmpl, const cv::Mat& image, const AffineWarp& warp, WarpModel model,
+                double min_inside, Eigen::Matrix<double, 6, 1>& dp, double& zncc_out) {
   const int half = tmpl.half, n = 2 * half + 1;
   std::vector<int> used;
   std::vector<float> w;
@@ -318,11 +342,8 @@ bool stepMasked(const PatchTemplate& tmpl, const cv::Mat& image, const AffineWar
     b += s * (wv - tv);
     zncc += wv * tv;
   }
-  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
-  if (!wellConditioned(ldlt)) return false;
-  dp = ldlt.solve(b);
   zncc_out = zncc;
-  return true;
+  return solveStep(H, b, model, dp);
 }
 
 }  // namespace
@@ -338,7 +359,9 @@ AlignResult alignAffine(const PatchTemplate& tmpl, const cv::Mat& image, AffineW
     double zncc = -1.0;
     const bool whole = tmpl.inside.empty() && warpPatch(image, warp, tmpl.half, warped);
     if (!whole && min_inside >= 1.0) return res;  // leaves the image
-    if (!(whole ? stepWhole(tmpl, warped, dp, zncc) : stepMasked(tmpl, image, warp, min_inside, dp, zncc))) return res;
+    if (!(whole ? stepWhole(tmpl, options.model, warped, dp, zncc)
+                : stepMasked(tmpl, image, warp, options.model, min_inside, dp, zncc)))
+      return res;
     res.zncc = zncc;
     Eigen::Matrix2d D;
     D << 1.0 + dp[0], dp[1], dp[2], 1.0 + dp[3];

@@ -30,13 +30,19 @@ struct PatchTemplate {
   std::vector<float> values;  ///< normalized intensities, row-major
   std::vector<float> sd;      ///< 6 steepest-descent values per pixel
   Eigen::Matrix<double, 6, 6> H_inv;
+  Eigen::Matrix2d H_translation_inv;  ///< inverse of H's translation block (WarpModel::kTranslation)
   std::vector<unsigned char> inside;  ///< per pixel, 1 = in the image; empty: the whole square
   double min_inside = 1.0;            ///< the share asked when it was cut (alignAffine asks no more of it)
   bool valid = false;                 ///< false: too little of it in the image, or without texture
 };
 
+/// The warps alignAffine searches: the whole affine group, or translations only (the
+/// other four parameters held at the initial guess's A).
+enum class WarpModel { kAffine, kTranslation };
+
 /// Options of alignAffine.
 struct AlignOptions {
+  WarpModel model = WarpModel::kAffine;
   int max_iterations = 10;
   double epsilon_px = 0.01;       ///< stops when the centre moves less than this
   double max_scale_change = 3.0;  ///< singular values of A outside [1/this, this]: diverged

@@ -24,11 +24,12 @@ struct TrackerParams {
   bool stereo_gain_compensation = true;
   /// A right match farther than this from its epipolar line (known extrinsics) is dropped.
   double stereo_epipolar_px = 2.0;
-  /// Each right match is refined by aligning the left patch to the right image (affine, gain
-  /// and bias invariant, as the first-patch alignment) and kept when that converges within
-  /// 1 px of KLT's. KLT's disparity is biased by left/right brightness differences a global
-  /// gain does not remove (vignetting, saturation), most on near, weakly textured surfaces.
-  bool stereo_refine = false;
+  /// Each right match is refined by aligning the left patch to the right image, gain and
+  /// bias invariant, and kept when that converges within 1 px of KLT's: 1 with an affine
+  /// warp (as the first-patch alignment), 2 with a translation only; 0 keeps KLT's match.
+  /// KLT's disparity is biased by left/right brightness differences a global gain does not
+  /// remove (vignetting, saturation), most on near, weakly textured surfaces.
+  int stereo_refine = 0;
   /// A right match whose patch correlates worse than this with the left one (ZNCC of the
   /// patch_half patches) is dropped: such matches are more often wrong (> 1 px or hidden)
   /// or beside a vehicle than the rest (docs/method.md). -1 switches the check off.
@@ -121,7 +122,9 @@ struct TrackerParams {
     v.param({"stereo_gain_compensation", "0/1, right image's gain and offset mapped to the left's"},
             stereo_gain_compensation);
     v.param({"stereo_epipolar_px", "px from the epipolar line", ParamRule::kPositive}, stereo_epipolar_px);
-    v.param({"stereo_refine", "0/1, right matches refined by patch alignment"}, stereo_refine);
+    v.param({"stereo_refine", "0/1/2, right matches refined: 1 affine, 2 translation (gain and bias invariant)",
+             ParamRule::kNonNegative},
+            stereo_refine);
     v.param({"stereo_min_zncc", "ZNCC of the left and right patches, -1 = off", ParamRule::kCorrelation},
             stereo_min_zncc);
     v.param({"stereo_zncc_motion_only", "0/1, low-ZNCC right matches only kept out of the motion tests"},

@@ -113,7 +113,7 @@ Config rigConfig(const SimOptions& options) {
   if (options.family == Family::kValidation) validationRig(c);
   // A real camera's config: right matches refined gain- and bias-invariantly (KLT's
   // disparity is biased by brightness differences a global gain leaves, see TrackerParams).
-  c.tracker.stereo_refine = options.realism.enabled;
+  c.tracker.stereo_refine = options.realism.enabled ? 1 : 0;
   // A real camera's noise, blur and exposure changes make young static tracks fail the
   // stereo motion test: on such images a repeated failure removes only above chi2 80 or
   // after 3 failures in a row (docs/real-images.md; clean images keep removing at the
