@@ -142,20 +142,30 @@ def warped_patch(image, A, t, xs, ys):
     return p / norm if norm > 1e-6 else None
 
 
+def normalized_template(left, uv_l, half):
+    """The left (2 half + 1)^2 patch at uv_l, zero-mean and unit-norm, with its central-difference
+    gradients on the same scale; None when flat (below about one gray level of spread)."""
+    n = 2 * half + 1
+    big = cv2.getRectSubPix(left, (n + 2, n + 2), (float(uv_l[0]), float(uv_l[1])), patchType=cv2.CV_32F)
+    big = big.astype(np.float64)
+    t = big[1:-1, 1:-1]
+    norm = np.sqrt(((t - t.mean()) ** 2).sum())
+    if norm < n:
+        return None
+    gx = 0.5 * (big[1:-1, 2:] - big[1:-1, :-2]) / norm
+    gy = 0.5 * (big[2:, 1:-1] - big[:-2, 1:-1]) / norm
+    return (t - t.mean()) / norm, gx, gy
+
+
 def align_stereo_warp(left, right, uv_l, uv_r, half):
     """The right match refined by a gain- and offset-invariant alignment whose warp is a translation
     and, along the rows, the foreshortening of a slanted plane (u' = (1 + a) x + b y + tu, v' = y + tv;
     inverse compositional): None when flat or not converged."""
     n = 2 * half + 1
-    big = cv2.getRectSubPix(left, (n + 2, n + 2), (float(uv_l[0]), float(uv_l[1])), patchType=cv2.CV_32F)
-    big = big.astype(np.float64)
-    t = big[1:-1, 1:-1]
-    mean, norm = t.mean(), np.sqrt(((t - t.mean()) ** 2).sum())
-    if norm < n:
+    template = normalized_template(left, uv_l, half)
+    if template is None:
         return None
-    T = (t - mean) / norm
-    gx = 0.5 * (big[1:-1, 2:] - big[1:-1, :-2]) / norm
-    gy = 0.5 * (big[2:, 1:-1] - big[:-2, 1:-1]) / norm
+    T, gx, gy = template
     ys, xs = np.mgrid[-half:half + 1, -half:half + 1].astype(np.float64)
     sd = np.stack([gx * xs, gx * ys, gx, gy]).reshape(4, -1)
     H = sd @ sd.T
@@ -177,22 +187,14 @@ def align_stereo_warp(left, right, uv_l, uv_r, half):
     return None
 
 
-STOP_PX = 1e-4
-
-
 def align_translation(left, right, uv_l, uv_r, half):
     """The right match refined by a gain- and offset-invariant translation-only alignment (inverse
     compositional, both (2 half + 1)^2 patches zero-mean and unit-norm): None when flat or not converged."""
     n = 2 * half + 1
-    big = cv2.getRectSubPix(left, (n + 2, n + 2), (float(uv_l[0]), float(uv_l[1])), patchType=cv2.CV_32F)
-    big = big.astype(np.float64)
-    t = big[1:-1, 1:-1]
-    mean, norm = t.mean(), np.sqrt(((t - t.mean()) ** 2).sum())
-    if norm < n:
+    template = normalized_template(left, uv_l, half)
+    if template is None:
         return None
-    T = (t - mean) / norm
-    gx = 0.5 * (big[1:-1, 2:] - big[1:-1, :-2]) / norm
-    gy = 0.5 * (big[2:, 1:-1] - big[:-2, 1:-1]) / norm
+    T, gx, gy = template
     H = np.array([[(gx * gx).sum(), (gx * gy).sum()], [(gx * gy).sum(), (gy * gy).sum()]])
     if np.linalg.det(H) < 1e-12:
         return None
@@ -207,7 +209,7 @@ def align_translation(left, right, uv_l, uv_r, half):
         p -= step
         if np.linalg.norm(step) < 1e-4:
             return p
-    return p if np.linalg.norm(step) < STOP_PX else None
+    return None
 
 
 def lift(depth, uv):
@@ -256,7 +258,7 @@ def devignette(image, cam):
     r2 = ((x - k['cx']) ** 2 + (y - k['cy']) ** 2) / (0.25 * (w * w + h * h))
     v = 1 + args.devignette[0] * r2 + args.devignette[1] * r2 * r2
     return np.clip(image / v, 0, 255).astype(np.uint8)
-rows = {name: [] for name in matchers}  # (disparity err, true disparity, slant, contrast, row, phase, iterations)
+rows = {name: [] for name in matchers}  # (disparity err, true disparity, slant, contrast, row, phase, iterations, left u, err across)
 groups = defaultdict(int)
 crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 0.01)
 for t in frames:
@@ -317,8 +319,8 @@ for t in frames:
             d = pts[j] - k[2]
             if not np.all(np.isfinite(d)) or np.linalg.norm(d) > 3:
                 continue
-            rows[name].append((d @ k[3] * -1.0, k[4], k[5], k[6], k[7], (k[2][0]) % 1.0, iterations[j], k[0][0],
-                               d[1] if False else (d @ np.array([-k[3][1], k[3][0]]))))
+            across = d @ np.array([-k[3][1], k[3][0]])  # the error across the epipolar line
+            rows[name].append((-(d @ k[3]), k[4], k[5], k[6], k[7], k[2][0] % 1.0, iterations[j], k[0][0], across))
 
 height = cv2.imread(f'{ds}/mav0/cam0/data/{frames[0]}.png', cv2.IMREAD_GRAYSCALE).shape[0]
 bins = {
