@@ -13,7 +13,7 @@ SHARED=$ROOT/../shared/data
 CC=clang CXX=clang++ cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIDYVINS_FUZZ=ON \
   -DIDYVINS_SANITIZE=ON -DIDYVINS_BUILD_TESTS=OFF -DIDYVINS_BUILD_BENCH=OFF -DIDYVINS_BUILD_CLI=OFF \
   -DIDYVINS_BUILD_ROS=OFF > "$BUILD.configure.log"
-TARGETS=(${FUZZ_TARGETS:-config camera imu_csv image_csv groundtruth_csv trajectory bag})
+TARGETS=(${FUZZ_TARGETS:-config camera imu_csv image_csv groundtruth_csv trajectory bag mcap cdr})
 cmake --build "$BUILD" -j"${JOBS:-2}" --target $(printf 'fuzz_%s ' "${TARGETS[@]}") > "$BUILD.build.log"
 
 # Seed corpora: real files of each kind.
@@ -34,6 +34,24 @@ if [ ! -f "$BUILD/seed.bag" ]; then
     > /dev/null 2>&1 || true
 fi
 seed bag "$BUILD/seed.bag"
+if [ ! -f "$BUILD/seed.mcap" ]; then  # ROS 2: an MCAP written by @mcap/core (tests/ros2), uncompressed and zstd
+  (cd "$ROOT/tests/ros2" && [ -d node_modules ] || npm ci --no-audit --no-fund --loglevel=error) > /dev/null 2>&1 || true
+  node "$ROOT/tests/ros2/write_bag.mjs" "$SHARED/euroc_v101_micro" "$BUILD/seed.mcap" --frames 2 > /dev/null 2>&1 || true
+  node "$ROOT/tests/ros2/write_bag.mjs" "$SHARED/euroc_v101_micro" "$BUILD/seed_zstd.mcap" --frames 2 \
+    --compression zstd --chunk-size 2048 > /dev/null 2>&1 || true
+fi
+seed mcap "$BUILD/seed.mcap" "$BUILD/seed_zstd.mcap"
+if [ ! -f "$BUILD/seed_cdr/imu.cdr" ]; then  # one CDR message of each type @foxglove/rosmsg2-serialization writes
+  node "$ROOT/tests/ros2/write_bag.mjs" "$SHARED/euroc_v101_micro" "$BUILD/seed_records.json" --frames 1 \
+    --storage records > /dev/null 2>&1 &&
+    /usr/bin/python3 -c 'import base64, json, os, sys
+d = json.load(open(sys.argv[1])); os.makedirs(sys.argv[2], exist_ok=True); seen = set()
+for topic, _, b in d["records"]:
+    if topic not in seen:
+        seen.add(topic); open(os.path.join(sys.argv[2], topic.strip("/").replace("/", "_") + ".cdr"), "wb").write(base64.b64decode(b)[:4096])
+' "$BUILD/seed_records.json" "$BUILD/seed_cdr" || true
+fi
+seed cdr "$BUILD"/seed_cdr/*.cdr
 # Inputs small enough for libFuzzer to mutate: keep the first 4 KiB of the large seeds.
 for f in "$BUILD"/corpus/*/*; do [ "$(stat -c %s "$f")" -gt 4096 ] && head -c 4096 "$f" > "$f.tmp" && mv "$f.tmp" "$f"; done
 

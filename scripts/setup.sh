@@ -14,6 +14,8 @@ PACKAGES=(
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
   libclass-loader-dev librcpputils-dev librcutils-dev libament-index-cpp-dev
   python3-rosbag python3-sensor-msgs python3-nav-msgs python3-geometry-msgs
+  # ROS 2 bags without ROS 2: MCAP chunks (zstd, lz4, zlib's CRC) and rosbag2's sqlite3 storage
+  libzstd-dev liblz4-dev zlib1g-dev libsqlite3-dev
   # the ROS1 node idyvins_ros and its test: roscpp, tf2, cv_bridge, roscore, rosbag play / record
   libroscpp-dev libtf2-ros-dev libcv-bridge-dev libstd-msgs-dev ros-core python3-rospy python3-rosgraph
   # loop closure: place recognition over binary descriptors (faiss; it links OpenMP and BLAS)
@@ -38,14 +40,21 @@ done
 # The report page's libraries (three.js, uPlot) and build/test tools (esbuild, playwright-core)
 # come from the npm registry into web/node_modules, pinned by web/package-lock.json; the build
 # bundles them into the idyvins binary. Node.js and npm: the machine's, else Debian's.
-web_modules() {
-  local web
-  web="$(cd "$(dirname "$0")/.." && pwd)/web"
-  if [ -f "$web/node_modules/.package-lock.json" ] && [ ! "$web/package-lock.json" -nt "$web/node_modules/.package-lock.json" ]; then
+# The ROS 2 bag tests' independent writer and reader (tests/ros2: @mcap/core, rosmsg2-serialization)
+# the same way, into tests/ros2/node_modules.
+npm_folder() {  # npm_folder DIR: npm ci there unless node_modules matches the lock file
+  local dir=$1
+  if [ -f "$dir/node_modules/.package-lock.json" ] && [ ! "$dir/package-lock.json" -nt "$dir/node_modules/.package-lock.json" ]; then
     return 0
   fi
-  echo "setup: npm ci in $web"
-  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error)
+  echo "setup: npm ci in $dir"
+  (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error)
+}
+web_modules() {
+  local root
+  root="$(cd "$(dirname "$0")/.." && pwd)"
+  npm_folder "$root/web"
+  npm_folder "$root/tests/ros2"
 }
 if ! command -v npm > /dev/null; then missing+=(nodejs npm); fi
 

@@ -1,5 +1,6 @@
 #include "bench_sweep.h"
 
+#include <algorithm>
 #include <fstream>
 #include <map>
 
@@ -74,8 +75,16 @@ std::string shellQuote(const std::string& word) {
 
 std::string datasetChecksum(const std::string& path) {
   if (fs::is_regular_file(path)) return hex64(fnv1a64File(path));
-  if (!fs::is_directory(path)) throw InputError(path, "no such dataset (a EuRoC folder or a ROS1 bag)");
+  if (!fs::is_directory(path)) throw InputError(path, "no such dataset (a EuRoC folder, a ROS1 bag or a ROS 2 bag)");
   std::uint64_t h = kFnv1a64Offset;
+  if (fs::is_regular_file(fs::path(path) / "metadata.yaml")) {  // a ROS 2 bag folder: every file in it
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(path))
+      if (e.is_regular_file()) files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    for (const fs::path& p : files) h = fnv1a64File(p.string(), fnv1a64(p.filename().string(), h));
+    return hex64(h);
+  }
   for (const char* f : {"meta.json", "mav0/imu0/data.csv", "mav0/cam0/data.csv", "mav0/cam1/data.csv",
                         "mav0/state_groundtruth_estimate0/data.csv"}) {
     const fs::path p = fs::path(path) / f;

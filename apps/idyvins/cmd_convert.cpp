@@ -1,4 +1,4 @@
-// `idyvins convert BAG OUT`: a ROS1 bag as a EuRoC ASL folder (what `run` reads
+// `idyvins convert BAG OUT`: a ROS1 or ROS 2 bag as a EuRoC ASL folder (what `run` reads
 // identically from either).
 
 #include <cstdio>
@@ -50,7 +50,8 @@ void writeImuCsv(const fs::path& path, const std::vector<ImuSample>& imu) {
 }
 
 int runConvert(const ConvertArgs& a) {
-  if (!io::isBagFile(a.bag)) throw InputError(a.bag, "not a ROS1 bag (expected the '#ROSBAG V2.0' header)");
+  if (!io::isBagFile(a.bag))
+    throw InputError(a.bag, "not a bag (a ROS1 .bag, a ROS 2 bag folder with metadata.yaml, an .mcap or .db3 file)");
   std::optional<Config> config;
   if (!a.config.empty()) config = loadConfig(a.config);
   io::BagTopics topics;
@@ -113,12 +114,12 @@ void registerConvert(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<ConvertArgs>();
   CLI::App* cmd = app.add_subcommand(
       "convert",
-      "Write a ROS1 bag as a EuRoC ASL folder: OUT/mav0/cam0 and cam1 (data.csv and PNGs of the\n"
+      "Write a ROS1 or ROS 2 bag as a EuRoC ASL folder: OUT/mav0/cam0 and cam1 (data.csv and PNGs of the\n"
       "stereo pairs, 8-bit gray, both named by the left stamp), imu0/data.csv, and\n"
       "state_groundtruth_estimate0/data.csv from the ground-truth topic (pose; velocity and\n"
       "biases zero), and cam0/mask/ (moving-object labels) when the config names a segmentation topic\n"
       "the bag has. `run` gives the same outputs on the bag and on the folder.");
-  cmd->add_option("bag", a->bag, "ROS1 bag")->required();
+  cmd->add_option("bag", a->bag, "ROS1 .bag, or ROS 2 bag (folder with metadata.yaml, .mcap or .db3)")->required();
   cmd->add_option("out", a->out, "output folder (OUT/mav0 must not exist)")->required();
   cmd->add_option("-c,--config", a->config,
                   "VINS-Fusion config: topics (imu_topic, image0_topic, image1_topic, groundtruth_topic)\n"

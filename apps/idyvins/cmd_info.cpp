@@ -64,7 +64,8 @@ std::pair<int, int> validateImages(const io::EurocDataset& ds, int width, int he
 std::pair<int, int> validateBagImages(const io::BagIndex& index, int width, int height) {
   const std::size_t total = index.dataset.pairs.size();
   // The source needs the image stamps only: no copy of the IMU and the ground truth.
-  io::BagIndex images{index.path, index.topics, index.all_topics, {}, index.segmentation, index.segmentation_of_pair};
+  io::BagIndex images{index.path,  index.topics, index.all_topics, {}, index.segmentation, index.segmentation_of_pair,
+                      index.format};
   const io::EurocDataset& d = index.dataset;
   images.dataset.root = d.root;
   images.dataset.cam0 = d.cam0;
@@ -135,7 +136,8 @@ void printJson(const InfoArgs& args, const InfoOutcome& o) {
                       {"image_height", o.size.second},
                       {"config", o.config ? o.config->path : ""}};
   if (o.bag) {
-    j["format"] = "rosbag";
+    j["format"] = o.bag->format.rfind("ROS1", 0) == 0 ? "rosbag" : "rosbag2";
+    j["bag_format"] = o.bag->format;
     j["topics"] = nlohmann::json::array();
     for (const auto& t : o.bag->all_topics)
       j["topics"].push_back({{"topic", t.topic}, {"type", t.type}, {"count", t.count}});
@@ -147,7 +149,7 @@ void printJson(const InfoArgs& args, const InfoOutcome& o) {
 void printText(const InfoArgs& args, const InfoOutcome& o) {
   const io::DatasetSummary& s = o.s;
   const io::BagIndex* bag = o.bag;
-  std::printf("dataset: %s (%s, %s)\n", o.ds.root.c_str(), bag ? "ROS1 bag" : "EuRoC ASL",
+  std::printf("dataset: %s (%s, %s)\n", o.ds.root.c_str(), bag ? bag->format.c_str() : "EuRoC ASL",
               s.stereo ? "stereo" : "mono");
   if (bag) {
     for (const auto& t : bag->all_topics)
@@ -229,11 +231,14 @@ void registerInfo(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<InfoArgs>();
   CLI::App* cmd =
       app.add_subcommand("info",
-                         "Print what a EuRoC ASL dataset or a ROS1 bag holds (counts, rates, time span, gaps,\n"
+                         "Print what a EuRoC ASL dataset or a ROS1 / ROS 2 bag holds (counts, rates, time span, gaps,\n"
                          "unmatched stereo rows, calibration; for a bag also every topic with its type and count)\n"
                          "and validate it: syntax, time order, every image readable and of the config's size.\n"
                          "Exits 1 with file:line: reason on bad input.");
-  cmd->add_option("dataset", args->dataset, "EuRoC folder (holding mav0/), the mav0 folder, or a ROS1 bag")->required();
+  cmd->add_option("dataset", args->dataset,
+                  "EuRoC folder (holding mav0/), the mav0 folder, a ROS1 .bag, or a ROS 2 bag (folder with\n"
+                  "metadata.yaml, .mcap or .db3)")
+      ->required();
   cmd->add_option("--groundtruth-topic", args->groundtruth_topic,
                   "bag only: ground-truth topic, e.g. /odometry (VIODE) or /vicon/firefly_sbx/firefly_sbx (EuRoC)");
   cmd->add_option("-c,--config", args->config, "VINS-Fusion config to validate against (image size, camera count)");

@@ -140,8 +140,9 @@ void registerRun(CLI::App& app, int& exit_code, const std::string& command_line)
       "OUT is written whole (in OUT.partial-PID, swapped in when complete). SIGINT / SIGTERM:\n"
       "the frames so far are finished and written, marked partial in stats.json; exit 130 / 143.");
   cmd->add_option("-c,--config", a->config, "VINS-Fusion config")->required();
-  cmd->add_option("-d,--dataset", a->dataset,
-                  "EuRoC folder or ROS1 bag (topics from the config's imu_topic, image0_topic, image1_topic)")
+  cmd->add_option(
+         "-d,--dataset", a->dataset,
+         "EuRoC folder, ROS1 bag or ROS 2 bag (topics from the config's imu_topic, image0_topic, image1_topic)")
       ->required();
   addOutputOptions(cmd, *a);
   cmd->add_option("--groundtruth-topic", a->groundtruth_topic,

@@ -49,10 +49,12 @@ void writeBag(const SimulateArgs& a, const std::string& scene, const std::string
     fs::copy_file(tables / f, config_dir / f, fs::copy_options::overwrite_existing);
   }
   io::BagWriteOptions w;
+  w.format = a.format == "mcap" ? "mcap" : "ros1";
   w.compression = a.compression;
   w.rgb_ids = (config_dir / "rgb_ids.txt").string();
   w.vehicle_ids = (config_dir / vehicles).string();
-  const std::string bag = (fs::path(out) / viodeBagName(level)).string();
+  const std::string bag_name = a.format == "mcap" ? fs::path(viodeBagName(level)).stem().string() : viodeBagName(level);
+  const std::string bag = (fs::path(out) / bag_name).string();
   io::writeViodeBag(io::readEurocDataset(out), bag, w);
   // The config names VIODE's topics and the colour tables.
   const std::string config_path = (config_dir / "sim_stereo_imu_config.yaml").string();
@@ -65,9 +67,10 @@ void writeBag(const SimulateArgs& a, const std::string& scene, const std::string
   cfg.segmentation_rgb_ids = "rgb_ids.txt";
   cfg.segmentation_vehicle_ids = vehicles;
   saveConfig(cfg, config_path);
-  if (a.format == "bag") fs::remove_all(fs::path(out) / "mav0");  // the staging folder's, written above
-  std::printf("%s: VIODE topics /imu0 /cam0/image_raw /cam1/image_raw /odometry /cam0/segmentation\n",
-              (fs::path(final_dir) / viodeBagName(level)).string().c_str());
+  if (a.format == "bag" || a.format == "mcap") fs::remove_all(fs::path(out) / "mav0");  // the staging folder's
+  std::printf("%s: %s, VIODE topics /imu0 /cam0/image_raw /cam1/image_raw /odometry /cam0/segmentation\n",
+              (fs::path(final_dir) / bag_name).string().c_str(),
+              a.format == "mcap" ? "ROS 2 bag (rosbag2 folder, MCAP)" : "ROS1 bag");
 }
 
 /// OUT, staged and never replacing what simulate did not write (an earlier render is replaced).
@@ -76,7 +79,8 @@ io::OutputFolderOptions simulateFolderOptions(const SimulateArgs& a) {
   o.tool = "simulate";
   o.inputs = {a.viode_tables};
   o.force = a.force;
-  o.legacy_names = {"mav0", "config", "meta.json", "0_none.bag", "1_low.bag", "2_mid.bag", "3_high.bag"};
+  o.legacy_names = {"mav0",       "config", "meta.json", "0_none.bag", "1_low.bag", "2_mid.bag",
+                    "3_high.bag", "0_none", "1_low",     "2_mid",      "3_high"};
   o.legacy_required = {"meta.json"};
   return o;
 }
@@ -129,8 +133,12 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
 
 int runSimulate(const SimulateArgs& a) {
   if (!(a.duration > 0)) throw CLI::ValidationError("--duration", "must be positive");
-  if (a.depth && a.format == "bag")
+  if (a.depth && (a.format == "bag" || a.format == "mcap"))
     throw CLI::ValidationError("--depth", "depth images go into the EuRoC folder: --format euroc or both");
+  if (a.format == "mcap" && a.compression == "bz2")
+    throw CLI::ValidationError("--compression", "MCAP chunks are none, zstd or lz4 (bz2 is ROS1's)");
+  if (a.format != "mcap" && a.compression == "zstd")
+    throw CLI::ValidationError("--compression", "ROS1 bag chunks are none, bz2 or lz4 (zstd is MCAP's: --format mcap)");
   if (a.noise < 0) throw CLI::ValidationError("--noise", "must be >= 0");
   if (!a.standard_set) return simulateOne(a, a.scene, a.level, a.out);
   for (const char* scene : {"city", "parking_lot"})
@@ -208,10 +216,13 @@ void registerSimulate(CLI::App& app, int& exit_code) {
   cmd->add_option("--format", a->format,
                   "euroc (default): the EuRoC folder; bag: OUT/<k>_<level>.bag (VIODE's names) with VIODE's topics\n"
                   "and message types (/imu0, /cam0/image_raw and /cam1/image_raw mono8, /odometry, /cam0/segmentation\n"
-                  "coloured with VIODE's tables) and the config naming them; both: the folder and the bag")
-      ->check(CLI::IsMember({"euroc", "bag", "both"}));
-  cmd->add_option("--compression", a->compression, "bag chunks: none (default), bz2, lz4")
-      ->check(CLI::IsMember({"none", "bz2", "lz4"}));
+                  "coloured with VIODE's tables) and the config naming them; both: the folder and the bag;\n"
+                  "mcap: a ROS 2 bag, the rosbag2 folder OUT/<k>_<level>/ (metadata.yaml, one .mcap, CDR) with the\n"
+                  "same topics in ROS 2's types (sensor_msgs/msg/Image, ...)")
+      ->check(CLI::IsMember({"euroc", "bag", "both", "mcap"}));
+  cmd->add_option("--compression", a->compression,
+                  "bag chunks: none (default), bz2, lz4 (ROS1); none, zstd, lz4 (MCAP)")
+      ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}));
   cmd->add_option("--viode-tables", a->viode_tables,
                   "folder with VIODE's rgb_ids.txt and vehicle_ids_*.txt (default: the source tree's config/viode)");
   cmd->add_flag("--opening-vehicle", a->opening_vehicle,

@@ -132,11 +132,11 @@ void registerTrack(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "track",
       "Run the front end alone (stereo KLT tracker with the baseline, ransac or seg rejection)\n"
-      "on a EuRoC folder or a ROS1 bag; print feature counts, the share with a right-image match and their\n"
+      "on a EuRoC folder or a ROS1 / ROS 2 bag; print feature counts, the share with a right-image match and their\n"
       "distance to the epipolar line, track lengths and timing; optionally save images with the\n"
       "tracks drawn (green kept, yellow dynamic candidates, red removed).");
   cmd->add_option("-c,--config", a->config, "VINS-Fusion config")->required();
-  cmd->add_option("-d,--dataset", a->dataset, "EuRoC folder or ROS1 bag (topics from the config)")->required();
+  cmd->add_option("-d,--dataset", a->dataset, "EuRoC folder, ROS1 or ROS 2 bag (topics from the config)")->required();
   cmd->add_option("--mode", a->mode, "baseline | ransac | seg (seg reads mav0/cam0/mask/)");
   cmd->add_option("--save-tracks", a->save_tracks, "folder for the track images");
   cmd->add_option("--frames", a->max_frames, "stop after this many frames (0 = all)")->check(CLI::NonNegativeNumber);

@@ -330,7 +330,7 @@ void declareModeParam(ParamVisitor& v, std::string& mode_name) {
 
 /// The bag topics and VIODE's segmentation tables.
 void declareTopicParams(ParamVisitor& v, Config& c) {
-  v.section("ROS1 bag topics");
+  v.section("Bag topics (ROS1 and ROS 2)");
   v.param({"imu_topic", "ROS topic"}, c.imu_topic);
   v.param({"image0_topic", "ROS topic"}, c.image0_topic);
   v.param({"image1_topic", "ROS topic"}, c.image1_topic);

@@ -1,8 +1,8 @@
 #pragma once
-// ROS1 bag files as datasets (DESIGN §2: one time-ordered stream, wherever the
-// data comes from). Reading and deserialization are Debian's rosbag_storage and
-// the ROS message definitions; no ROS installation, master or environment. This
-// header does not include ROS headers.
+// Bags as datasets (DESIGN §2: one time-ordered stream, wherever the data comes from): ROS1 bags
+// (Debian's rosbag_storage and the ROS message definitions) and ROS 2 bags (MCAP or sqlite3, CDR),
+// both without a ROS installation, master or environment, through one BagFile (bag_file.h).
+// This header does not include ROS headers.
 //
 // A bag is indexed once (IMU samples, ground truth and the header stamps of every
 // image are kept; image pixels are not), then streamed: images are decoded as the
@@ -15,6 +15,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "io/bag_file.h"
 #include "io/data_source.h"
 #include "io/euroc_dataset.h"
 
@@ -50,12 +51,6 @@ SegmentationColors readSegmentationColors(const std::string& rgb_ids_path, const
 /// The CV_8UC1 mask (moving-object labels, 0 = static) of a CV_8UC3 image in RGB order.
 cv::Mat labelsFromColors(const cv::Mat& rgb, const SegmentationColors& colors);
 
-/// One topic of a bag, as its index lists it.
-struct BagTopicInfo {
-  std::string topic, type;
-  std::size_t count = 0;
-};
-
 /// A bag's index: every topic, and the streams of `topics` in the EuRoC dataset's
 /// form (image records carry the message's header stamp; `path` names the bag and
 /// topic, `csv_line` the message's position on its topic, 1-based).
@@ -66,10 +61,11 @@ struct BagIndex {
   EurocDataset dataset;
   std::vector<ImageRecord> segmentation;   ///< stamps of the segmentation topic (when named)
   std::vector<long> segmentation_of_pair;  ///< per pair: the segmentation image with cam0's stamp, -1 = none
+  std::string format;                      ///< BagFile::format(): "ROS1 bag", "ROS 2 bag (mcap, chunks zstd)"
 };
 
-/// True when `path` names a bag file (a regular file whose first bytes are the
-/// ROS bag 2.0 magic), false for folders and other files.
+/// True when `path` names a bag of either format (bagFormat): a ROS1 bag file, a rosbag2 folder
+/// (metadata.yaml), an .mcap or rosbag2 .db3 file; false for EuRoC folders and other files.
 bool isBagFile(const std::string& path);
 
 /// Indexes a bag: IMU (sensor_msgs/Imu), images (sensor_msgs/Image or
@@ -100,6 +96,7 @@ class BagSource : public DataSource {
  private:
   struct Reader;  // the open bag and its view (ROS types stay in the .cpp)
   bool nextPairImages(cv::Mat& left, cv::Mat& right, cv::Mat& mask);
+  void takeMessage();
   BagIndex index_;
   std::optional<SegmentationColors> masks_;
   int width_, height_;

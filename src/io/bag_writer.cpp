@@ -139,48 +139,84 @@ cv::Mat segmentationRgb(const EurocDataset& ds, const StereoPair& p, const std::
   return rgb;
 }
 
+/// The ROS1 bag's messages (rosbag_storage).
+class Ros1Sink : public ViodeSink {
+ public:
+  Ros1Sink(const std::string& path, const std::string& compression) : path_(path) {
+    try {
+      bag_.open(path, rosbag::bagmode::Write);
+    } catch (const rosbag::BagException& e) {
+      throw InputError(path, std::string("cannot write the bag: ") + e.what());
+    }
+    if (compression == "bz2")
+      bag_.setCompression(rosbag::compression::BZ2);
+    else if (compression == "lz4")
+      bag_.setCompression(rosbag::compression::LZ4);
+    else if (compression != "none")
+      throw InputError(path, "unknown compression '" + compression + "' (none, bz2, lz4)");
+  }
+  void imu(const ImuSample& s) override {
+    guarded([&] { bag_.write("/imu0", rosTime(s.t_ns), imuMsg(s)); });
+  }
+  void odometry(const GroundTruthState& g) override {
+    guarded([&] { bag_.write("/odometry", rosTime(g.t_ns), odometryMsg(g)); });
+  }
+  void image(const std::string& topic, const cv::Mat& image, TimeNs t, const std::string& frame_id) override {
+    guarded([&] { bag_.write(topic, rosTime(t), imageMsg(image, t, frame_id)); });
+  }
+  void close() override {
+    guarded([&] { bag_.close(); });
+  }
+
+ private:
+  template <typename F>
+  void guarded(F f) {
+    try {
+      f();
+    } catch (const rosbag::BagException& e) {
+      throw InputError(path_, std::string("cannot write the bag: ") + e.what());
+    }
+  }
+  std::string path_;
+  rosbag::Bag bag_;
+};
+
 }  // namespace
 
-void writeViodeBag(const EurocDataset& ds, const std::string& bag_path, const BagWriteOptions& options) {
-  const bool segmentation = !options.rgb_ids.empty();
+void writeViode(const EurocDataset& ds, ViodeSink& sink, const std::string& rgb_ids, const std::string& vehicle_ids) {
+  const bool segmentation = !rgb_ids.empty();
   std::array<cv::Vec3b, 256> colours{};
-  if (segmentation) colours = maskColours(options.rgb_ids, options.vehicle_ids);
-  rosbag::Bag bag;
-  try {
-    bag.open(bag_path, rosbag::bagmode::Write);
-    if (options.compression == "bz2")
-      bag.setCompression(rosbag::compression::BZ2);
-    else if (options.compression == "lz4")
-      bag.setCompression(rosbag::compression::LZ4);
-    else if (options.compression != "none")
-      throw InputError(bag_path, "unknown compression '" + options.compression + "' (none, bz2, lz4)");
-    // Messages in time order: IMU and ground truth with a stamp up to a frame's come first.
-    std::size_t i_imu = 0, i_gt = 0;
-    auto flushUntil = [&](TimeNs t) {
-      for (; i_imu < ds.imu.size() && ds.imu[i_imu].t_ns <= t; ++i_imu)
-        bag.write("/imu0", rosTime(ds.imu[i_imu].t_ns), imuMsg(ds.imu[i_imu]));
-      for (; i_gt < ds.groundtruth.size() && ds.groundtruth[i_gt].t_ns <= t; ++i_gt)
-        bag.write("/odometry", rosTime(ds.groundtruth[i_gt].t_ns), odometryMsg(ds.groundtruth[i_gt]));
-    };
-    const std::string csv0 = (std::filesystem::path(ds.root) / "cam0" / "data.csv").string();
-    const std::string csv1 = (std::filesystem::path(ds.root) / "cam1" / "data.csv").string();
-    for (const StereoPair& p : ds.pairs) {
-      flushUntil(p.t_ns);
-      const cv::Mat left = loadGrayImage(ds.cam0[p.i0], csv0, 0, 0);
-      bag.write("/cam0/image_raw", rosTime(ds.cam0[p.i0].t_ns), imageMsg(left, ds.cam0[p.i0].t_ns, "cam0"));
-      if (ds.stereo()) {
-        const cv::Mat right = loadGrayImage(ds.cam1[p.i1], csv1, left.cols, left.rows);
-        bag.write("/cam1/image_raw", rosTime(ds.cam1[p.i1].t_ns), imageMsg(right, ds.cam1[p.i1].t_ns, "cam1"));
-      }
-      if (segmentation)
-        bag.write("/cam0/segmentation", rosTime(ds.cam0[p.i0].t_ns),
-                  imageMsg(segmentationRgb(ds, p, csv0, left.size(), colours), ds.cam0[p.i0].t_ns, "cam0"));
-    }
-    flushUntil(std::numeric_limits<TimeNs>::max());
-    bag.close();
-  } catch (const rosbag::BagException& e) {
-    throw InputError(bag_path, std::string("cannot write the bag: ") + e.what());
+  if (segmentation) colours = maskColours(rgb_ids, vehicle_ids);
+  // Messages in time order: IMU and ground truth with a stamp up to a frame's come first.
+  std::size_t i_imu = 0, i_gt = 0;
+  auto flushUntil = [&](TimeNs t) {
+    for (; i_imu < ds.imu.size() && ds.imu[i_imu].t_ns <= t; ++i_imu) sink.imu(ds.imu[i_imu]);
+    for (; i_gt < ds.groundtruth.size() && ds.groundtruth[i_gt].t_ns <= t; ++i_gt) sink.odometry(ds.groundtruth[i_gt]);
+  };
+  const std::string csv0 = (std::filesystem::path(ds.root) / "cam0" / "data.csv").string();
+  const std::string csv1 = (std::filesystem::path(ds.root) / "cam1" / "data.csv").string();
+  for (const StereoPair& p : ds.pairs) {
+    flushUntil(p.t_ns);
+    const cv::Mat left = loadGrayImage(ds.cam0[p.i0], csv0, 0, 0);
+    sink.image("/cam0/image_raw", left, ds.cam0[p.i0].t_ns, "cam0");
+    if (ds.stereo())
+      sink.image("/cam1/image_raw", loadGrayImage(ds.cam1[p.i1], csv1, left.cols, left.rows), ds.cam1[p.i1].t_ns,
+                 "cam1");
+    if (segmentation)
+      sink.image("/cam0/segmentation", segmentationRgb(ds, p, csv0, left.size(), colours), ds.cam0[p.i0].t_ns, "cam0");
   }
+  flushUntil(std::numeric_limits<TimeNs>::max());
+  sink.close();
+}
+
+void writeViodeBag(const EurocDataset& ds, const std::string& bag_path, const BagWriteOptions& options) {
+  if (options.format == "mcap") {
+    writeViodeRos2(ds, bag_path, options);
+    return;
+  }
+  if (options.format != "ros1") throw InputError(bag_path, "unknown bag format '" + options.format + "' (ros1, mcap)");
+  Ros1Sink sink(bag_path, options.compression);
+  writeViode(ds, sink, options.rgb_ids, options.vehicle_ids);
 }
 
 }  // namespace idyvins::io

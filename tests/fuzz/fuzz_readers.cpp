@@ -15,6 +15,7 @@
 #include "core/error.h"
 #include "io/bag_dataset.h"
 #include "io/euroc_dataset.h"
+#include "io/ros2_messages.h"
 #include "io/trajectory_io.h"
 
 namespace {
@@ -56,6 +57,30 @@ void readOnce(const std::uint8_t* data, std::size_t size) {
   const std::string p = scratch("in.bag");
   writeFile(p, data, size);
   io::indexBag(p, io::BagTopics{});
+#elif IDYVINS_FUZZ_TARGET == 7  // ROS 2 bags in MCAP
+  const std::string p = scratch("in.mcap");
+  writeFile(p, data, size);
+  io::indexBag(p, io::BagTopics{});
+#elif IDYVINS_FUZZ_TARGET == 8  // ROS 2 messages in CDR: every type idyvins reads
+  try {
+    io::decodeRos2Image(data, size, io::BagMessageKind::kImage);
+  } catch (const io::BagMessageError&) {
+  }
+  try {
+    io::decodeRos2Image(data, size, io::BagMessageKind::kCompressedImage);
+  } catch (const io::BagMessageError&) {
+  }
+  try {
+    io::decodeRos2Imu(data, size);
+  } catch (const io::BagMessageError&) {
+  }
+  for (auto kind : {io::BagMessageKind::kOdometry, io::BagMessageKind::kTransform, io::BagMessageKind::kPose,
+                    io::BagMessageKind::kPoint}) {
+    try {
+      io::decodeRos2Pose(data, size, kind);
+    } catch (const io::BagMessageError&) {
+    }
+  }
 #endif
 }
 
