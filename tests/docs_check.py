@@ -9,6 +9,9 @@
                                        PNG in docs/ is at most 200 KB
   docs_check.py periods ROOT           no line of README, docs, code, tests or scripts names a
                                        work period by number; history is named by commit
+  docs_check.py anywhere ROOT IDYVINS  every command of README.md's ```sh blocks names the checkout's
+                                       files through $IDY (build/, config/, ...) and writes outside it,
+                                       and the quick start's `info` runs from another folder so written
   docs_check.py snippets ROOT          every ```cpp block of README.md and docs/*.md is a verbatim
                                        excerpt (consecutive lines) of a file in docs/examples/, which
                                        a test builds against the installed package
@@ -18,8 +21,10 @@ Prints one line per problem and exits 1 if there is any.
 import glob
 import os
 import re
+import shutil
 import subprocess
 import sys
+import tempfile
 
 
 def doc_files(root):
@@ -146,6 +151,41 @@ def check_snippets(root):
     return problems, n
 
 
+REPO_PATH = re.compile(r"(?<![\w/$.~-])(build|config|scripts|bench|docs|out|data_sim|tests|web)/")
+
+
+def check_anywhere(root, binary):
+    """README's shell commands work from any folder: repository paths through $IDY, outputs outside."""
+    text = open(os.path.join(root, "README.md"), encoding="utf-8").read()
+    problems, n = [], 0
+    info = None
+    for m in re.finditer(r"```sh\n(.*?)```", text, flags=re.S):
+        first = text[:m.start()].count("\n") + 2
+        for k, line in enumerate(m.group(1).split("\n")):
+            command = line.split("#")[0]
+            if not command.strip() or command.strip().startswith("make "):
+                continue
+            n += 1
+            bare = [p.group(0) for p in REPO_PATH.finditer(command)]
+            if bare:
+                problems.append(f"README.md:{first + k}: {', '.join(bare)} is relative to the checkout: write $IDY/...")
+            if " info " in command and info is None:
+                info = command
+    if info is None:
+        problems.append("README.md: no `idyvins info` command to try from another folder")
+        return problems, n
+    # The first `info` from a scratch folder, on the shared EuRoC excerpt in place of the user's data.
+    words = info.replace("$IDY", root).split()
+    words[words.index("info") + 1] = os.path.join(root, "..", "shared", "data", "euroc_v101_micro")
+    words[0] = os.path.abspath(binary)
+    scratch = tempfile.mkdtemp()
+    r = subprocess.run(words, cwd=scratch, capture_output=True, text=True)
+    if r.returncode != 0:
+        problems.append(f"README.md: {info.strip()} from {scratch}: exit {r.returncode}: {r.stderr.strip()[-200:]}")
+    shutil.rmtree(scratch, ignore_errors=True)
+    return problems, n
+
+
 def main():
     if len(sys.argv) < 3:
         print(__doc__)
@@ -160,6 +200,9 @@ def main():
     elif what == "periods":
         problems, n = check_periods(sys.argv[2])
         summary = f"{n} files"
+    elif what == "anywhere":
+        problems, n = check_anywhere(sys.argv[2], sys.argv[3])
+        summary = f"{n} README commands"
     elif what == "snippets":
         problems, n = check_snippets(sys.argv[2])
         summary = f"{n} C++ blocks"

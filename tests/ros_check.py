@@ -225,6 +225,20 @@ def check_recorded(work):
                     *[abs(a - b) for a, b in zip([p.x, p.y, p.z, q.x, q.y, q.z, q.w], r[1:])])
     check(bool(odom) and worst < 1e-6 and odom[0]._type == "nav_msgs/Odometry" and odom[0].header.frame_id == "world",
           "odometry equals the offline trajectory (largest difference %.1e, TUM's printed precision)" % worst)
+    # The covariance model (publisher.h): diagonal, positive, position sigma 0.02 m + 1 % of the path.
+    length, last = 0.0, None
+    cov_ok = bool(odom)
+    for m in odom:
+        p = m.pose.pose.position
+        length += 0.0 if last is None else ((p.x - last[0]) ** 2 + (p.y - last[1]) ** 2 + (p.z - last[2]) ** 2) ** 0.5
+        last = (p.x, p.y, p.z)
+        c = m.pose.covariance
+        sp = 0.02 + 0.01 * length
+        cov_ok = cov_ok and all(abs(c[7 * k] - sp * sp) < 1e-9 for k in range(3)) and all(
+            c[7 * k] > 0 for k in range(6)) and sum(abs(v) for v in c) - sum(c[7 * k] for k in range(6)) == 0 and all(
+            m.twist.covariance[7 * k] > 0 for k in range(6))
+    check(cov_ok, "odometry covariance: diagonal, never zero, position sigma 0.02 m + 1 %% of the path (%.2f m: "
+          "%.3f m at the end)" % (length, 0.02 + 0.01 * length))
     path = msgs.get("/idyvins1/path", [])
     check(bool(path) and path[-1]._type == "nav_msgs/Path" and len(path[-1].poses) == len(ref), "path: every pose")
     for name in ("map_static", "map_dynamic"):

@@ -173,6 +173,21 @@ void addRunThroughPlaceOptions(CLI::App* cmd, SimulateArgs& args) {
 
 }  // namespace
 
+/// --format and --compression: the EuRoC folder, a ROS1 bag or a ROS 2 bag.
+void addFormatOptions(CLI::App* cmd, SimulateArgs& args) {
+  SimulateArgs* a = &args;
+  cmd->add_option("--format", a->format,
+                  "euroc (default): the EuRoC folder; bag: OUT/<k>_<level>.bag (VIODE's names) with VIODE's topics\n"
+                  "and message types (/imu0, /cam0/image_raw and /cam1/image_raw mono8, /odometry, /cam0/segmentation\n"
+                  "coloured with VIODE's tables) and the config naming them; both: the folder and the bag;\n"
+                  "mcap: a ROS 2 bag, the rosbag2 folder OUT/<k>_<level>/ (metadata.yaml, one .mcap, CDR) with the\n"
+                  "same topics in ROS 2's types (sensor_msgs/msg/Image, ...)")
+      ->check(CLI::IsMember({"euroc", "bag", "both", "mcap"}));
+  cmd->add_option("--compression", a->compression,
+                  "bag chunks: none (default), bz2, lz4 (ROS1); none, zstd, lz4 (MCAP)")
+      ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}));
+}
+
 void registerSimulate(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<SimulateArgs>();
   CLI::App* cmd =
@@ -213,16 +228,7 @@ void registerSimulate(CLI::App& app, int& exit_code) {
                   "clock + td = IMU clock). The written config keeps td: 0; meta.json records the truth")
       ->check(CLI::Range(-100.0, 100.0));
   cmd->add_option("--threads", a->threads, "rendering threads")->check(CLI::Range(1, 64));
-  cmd->add_option("--format", a->format,
-                  "euroc (default): the EuRoC folder; bag: OUT/<k>_<level>.bag (VIODE's names) with VIODE's topics\n"
-                  "and message types (/imu0, /cam0/image_raw and /cam1/image_raw mono8, /odometry, /cam0/segmentation\n"
-                  "coloured with VIODE's tables) and the config naming them; both: the folder and the bag;\n"
-                  "mcap: a ROS 2 bag, the rosbag2 folder OUT/<k>_<level>/ (metadata.yaml, one .mcap, CDR) with the\n"
-                  "same topics in ROS 2's types (sensor_msgs/msg/Image, ...)")
-      ->check(CLI::IsMember({"euroc", "bag", "both", "mcap"}));
-  cmd->add_option("--compression", a->compression,
-                  "bag chunks: none (default), bz2, lz4 (ROS1); none, zstd, lz4 (MCAP)")
-      ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}));
+  addFormatOptions(cmd, *a);
   cmd->add_option("--viode-tables", a->viode_tables,
                   "folder with VIODE's rgb_ids.txt and vehicle_ids_*.txt (default: the source tree's config/viode)");
   cmd->add_flag("--opening-vehicle", a->opening_vehicle,

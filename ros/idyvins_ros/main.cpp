@@ -45,10 +45,26 @@ NodeArgs readParams(ros::NodeHandle& pnh, int argc, char** argv) {
   pnh.param<std::string>("world_frame", a.driver.publish.world_frame, "world");
   pnh.param<std::string>("body_frame", a.driver.publish.body_frame, "body");
   pnh.param("map_every_frames", a.driver.publish.map_every_frames, 10);
+  idyvins::ros_node::PublisherOptions& pub = a.driver.publish;  // the odometry covariance model (publisher.h)
+  pnh.param("position_sigma", pub.position_sigma_m, pub.position_sigma_m);
+  pnh.param("position_drift", pub.drift_fraction, pub.drift_fraction);
+  pnh.param("orientation_sigma", pub.orientation_sigma_rad, pub.orientation_sigma_rad);
+  pnh.param("orientation_drift", pub.drift_rad_per_m, pub.drift_rad_per_m);
+  pnh.param("velocity_sigma", pub.velocity_sigma_mps, pub.velocity_sigma_mps);
   pnh.param<std::string>("load_map", a.driver.load_map, "");
   pnh.param("localization_only", a.driver.localization_only, false);
   if (a.config_file.empty()) throw idyvins::InputError("idyvins_ros", "no config: set ~config_file or pass its path");
   if (a.driver.queue_frames < 0) throw idyvins::InputError("idyvins_ros", "~queue_frames must be >= 0");
+  for (const double v : {pub.position_sigma_m, pub.drift_fraction, pub.orientation_sigma_rad, pub.drift_rad_per_m,
+                         pub.velocity_sigma_mps})
+    if (!(v >= 0))
+      throw idyvins::InputError("idyvins_ros",
+                                "~position_sigma, ~position_drift, ~orientation_sigma, "
+                                "~orientation_drift and ~velocity_sigma must be >= 0");
+  if (pub.position_sigma_m == 0 || pub.orientation_sigma_rad == 0 || pub.velocity_sigma_mps == 0)
+    throw idyvins::InputError("idyvins_ros",
+                              "~position_sigma, ~orientation_sigma and ~velocity_sigma must be > 0 "
+                              "(a zero covariance claims an exact pose)");
   return a;
 }
 

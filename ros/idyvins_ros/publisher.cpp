@@ -82,7 +82,18 @@ void Publisher::onFrame(const StereoFrame& input, const pipeline::FrameOutput& o
     publishMaps(stamp);
 }
 
+std::array<double, 36> poseCovariance(const PublisherOptions& o, double path_m) {
+  const double sp = o.position_sigma_m + o.drift_fraction * path_m;
+  const double sr = o.orientation_sigma_rad + o.drift_rad_per_m * path_m;
+  std::array<double, 36> c{};
+  for (int k = 0; k < 6; ++k) c[static_cast<std::size_t>(7 * k)] = k < 3 ? sp * sp : sr * sr;
+  return c;
+}
+
 void Publisher::publishPose(const ros::Time& stamp, const imu::NavState& s) {
+  if (has_last_position_) path_m_ += (s.p_w_b - last_position_).norm();
+  last_position_ = s.p_w_b;
+  has_last_position_ = true;
   nav_msgs::Odometry odom;
   odom.header.stamp = stamp;
   odom.header.frame_id = options_.world_frame;
@@ -98,6 +109,12 @@ void Publisher::publishPose(const ros::Time& stamp, const imu::NavState& s) {
   odom.twist.twist.linear.x = v_b.x();
   odom.twist.twist.linear.y = v_b.y();
   odom.twist.twist.linear.z = v_b.z();
+  const std::array<double, 36> pose_cov = poseCovariance(options_, path_m_);
+  std::copy(pose_cov.begin(), pose_cov.end(), odom.pose.covariance.begin());
+  for (int k = 0; k < 6; ++k) {
+    odom.twist.covariance[static_cast<std::size_t>(7 * k)] =
+        k < 3 ? options_.velocity_sigma_mps * options_.velocity_sigma_mps : kUnknownVariance;
+  }
   odometry_.publish(odom);
 
   geometry_msgs::PoseStamped pose;
@@ -132,6 +149,9 @@ void Publisher::publishLoopPose(const ros::Time& stamp, const Eigen::Vector3d& p
   odom.header = pose.header;
   odom.child_frame_id = options_.body_frame;
   odom.pose.pose = pose.pose;
+  const std::array<double, 36> pose_cov = poseCovariance(options_, path_m_);  // loops bound it: the same model
+  std::copy(pose_cov.begin(), pose_cov.end(), odom.pose.covariance.begin());
+  for (int k = 0; k < 6; ++k) odom.twist.covariance[static_cast<std::size_t>(7 * k)] = kUnknownVariance;  // no twist
   odometry_loop_.publish(odom);
   path_loop_msg_.header.stamp = stamp;
   path_loop_msg_.poses.push_back(pose);

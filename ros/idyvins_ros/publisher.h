@@ -7,6 +7,7 @@
 #include <ros/ros.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <array>
 #include <chrono>
 #include <functional>
 #include <string>
@@ -22,7 +23,22 @@ struct PublisherOptions {
   std::string world_frame = "world";
   std::string body_frame = "body";
   int map_every_frames = 10;  ///< the map clouds are published every this many frames (and at the end)
+  /// The odometry's covariance, a documented model (not the window's marginal): position sigma
+  /// position_sigma_m + drift_fraction x the path travelled so far (odometry drifts with the
+  /// distance), orientation sigma orientation_sigma_rad + drift_rad_per_m x path, velocity sigma
+  /// velocity_sigma_mps (diagonal, REP 103 axes); the twist's angular part is not published: its
+  /// variance is kUnknownVariance.
+  double position_sigma_m = 0.02, drift_fraction = 0.01;
+  double orientation_sigma_rad = 0.005, drift_rad_per_m = 1e-4;
+  double velocity_sigma_mps = 0.05;
 };
+
+/// The odometry's 6x6 pose covariance (row-major; x, y, z, then rotation about x, y, z) after
+/// `path_m` metres, as PublisherOptions says.
+std::array<double, 36> poseCovariance(const PublisherOptions& o, double path_m);
+
+/// The variance of what the odometry does not estimate (the twist's angular rate, published as 0).
+constexpr double kUnknownVariance = 1e6;
 
 /// The loop closer's live correction of an odometry pose (pipeline::System::loopCorrected).
 using LoopCorrection = std::function<bool(const imu::NavState&, Eigen::Vector3d&, Eigen::Quaterniond&)>;
@@ -54,6 +70,9 @@ class Publisher final : public pipeline::FrameObserver {
   void publishMaps(const ros::Time& stamp);
 
   PublisherOptions options_;
+  double path_m_ = 0;  ///< the odometry's path so far (its covariance grows with it)
+  Eigen::Vector3d last_position_ = Eigen::Vector3d::Zero();
+  bool has_last_position_ = false;
   std::function<SteadyTime(TimeNs)> arrival_;
   LoopCorrection loop_correction_;
   ros::Publisher odometry_, path_, map_static_, map_dynamic_, image_, timing_;
