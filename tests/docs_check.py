@@ -175,8 +175,8 @@ def check_anywhere(root, binary):
         problems.append("README.md: no `idyvins info` command to try from another folder")
         return problems, n
     # The first `info` from a scratch folder, on the shared EuRoC excerpt in place of the user's data.
-    words = info.replace("$IDY", root).split()
-    words[words.index("info") + 1] = os.path.join(root, "..", "shared", "data", "euroc_v101_micro")
+    words = info.replace("$IDY", os.path.abspath(root)).split()
+    words[words.index("info") + 1] = os.path.join(os.path.abspath(root), "..", "shared", "data", "euroc_v101_micro")
     words[0] = os.path.abspath(binary)
     scratch = tempfile.mkdtemp()
     r = subprocess.run(words, cwd=scratch, capture_output=True, text=True)

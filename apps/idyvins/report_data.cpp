@@ -20,6 +20,26 @@ namespace {
 
 double round3(double v) { return std::isfinite(v) ? std::round(v * 1000.0) / 1000.0 : 0.0; }
 
+/// Decimals that keep a quantity of this size to 1 part in 10^4: 3 (mm) for metres of motion, 6 for
+/// a run that moved 1 cm; between 3 and 7.
+int decimalsFor(double extent) {
+  if (!(extent > 0) || !std::isfinite(extent)) return 3;
+  return std::clamp(4 - static_cast<int>(std::floor(std::log10(extent))), 3, 7);
+}
+
+double roundTo(double v, int decimals) {
+  const double k = std::pow(10.0, decimals);
+  return std::isfinite(v) ? std::round(v * k) / k : 0.0;
+}
+
+/// The largest extent (max - min) of the poses' positions along any axis.
+double extentOf(const std::vector<StampedPose>& poses) {
+  if (poses.empty()) return 0;
+  Eigen::Vector3d lo = poses[0].p_w_b, hi = lo;
+  for (const StampedPose& p : poses) lo = lo.cwiseMin(p.p_w_b), hi = hi.cwiseMax(p.p_w_b);
+  return (hi - lo).maxCoeff();
+}
+
 /// A JSON file, or InputError naming the line where it breaks.
 nlohmann::json readJson(const std::string& path) {
   std::ifstream in(path);
@@ -52,6 +72,7 @@ nlohmann::json readStats(const std::string& path) {
 nlohmann::json frameSeries(const nlohmann::json& frames, std::int64_t first_t_ns, nlohmann::json& ds_hist) {
   static const char* const numeric[] = {"tracking_ms",        "filter_ms", "optimization_ms",
                                         "marginalization_ms", "features",  "landmarks"};
+  static const char* const tracked[] = {"features_right", "features_new"};  // null in older runs' stats.json
   static const char* const dynamic[] = {
       "cv_before", "cv_after", "candidates", "eliminated", "candidates_in_window", "confirmed_dynamic"};
   nlohmann::json out = {{"t", nlohmann::json::array()}, {"status", nlohmann::json::array()}};
@@ -61,6 +82,7 @@ nlohmann::json frameSeries(const nlohmann::json& frames, std::int64_t first_t_ns
     out["t"].push_back(round3(static_cast<double>(f["t_ns"].get<std::int64_t>() - first_t_ns) * 1e-9));
     out["status"].push_back(f.value("status", ""));
     for (const char* k : numeric) out[k].push_back(round3(f.value(k, 0.0)));
+    for (const char* k : tracked) out[k].push_back(f.contains(k) ? nlohmann::json(f[k]) : nlohmann::json());
     const nlohmann::json& d = f.contains("dynamic") ? f["dynamic"] : nlohmann::json();
     any_dynamic = any_dynamic || d.is_object();
     for (const char* k : dynamic)
@@ -75,8 +97,9 @@ nlohmann::json frameSeries(const nlohmann::json& frames, std::int64_t first_t_ns
   return out;
 }
 
-nlohmann::json positions(const std::vector<StampedPose>& poses, const eval::Similarity& align,
-                         std::int64_t first_t_ns) {
+/// Positions rounded to `decimals` (decimalsFor the run's motion: a 1 cm run is not a line of 1 mm steps).
+nlohmann::json positions(const std::vector<StampedPose>& poses, const eval::Similarity& align, std::int64_t first_t_ns,
+                         int decimals) {
   nlohmann::json out = {{"t", nlohmann::json::array()},
                         {"x", nlohmann::json::array()},
                         {"y", nlohmann::json::array()},
@@ -84,9 +107,9 @@ nlohmann::json positions(const std::vector<StampedPose>& poses, const eval::Simi
   for (const StampedPose& p : poses) {
     const Eigen::Vector3d q = align.apply(p.p_w_b);
     out["t"].push_back(round3(static_cast<double>(p.t_ns - first_t_ns) * 1e-9));
-    out["x"].push_back(round3(q.x()));
-    out["y"].push_back(round3(q.y()));
-    out["z"].push_back(round3(q.z()));
+    out["x"].push_back(roundTo(q.x(), decimals));
+    out["y"].push_back(roundTo(q.y(), decimals));
+    out["z"].push_back(roundTo(q.z(), decimals));
   }
   return out;
 }
@@ -94,7 +117,7 @@ nlohmann::json positions(const std::vector<StampedPose>& poses, const eval::Simi
 /// Ground-truth panels: the estimate aligned (SE(3), evo's association), ATE over time and
 /// path, RPE; or why there are none.
 void addGroundTruth(nlohmann::json& run, const std::string& dir, const std::vector<StampedPose>& est,
-                    std::int64_t first_t_ns, eval::Similarity& align, const std::string& fallback) {
+                    std::int64_t first_t_ns, eval::Similarity& align, const std::string& fallback, int decimals) {
   const std::string own = dir + "/groundtruth.tum";
   if (!fs::exists(own) && fallback.empty()) {
     run["gt_note"] =
@@ -118,16 +141,17 @@ void addGroundTruth(nlohmann::json& run, const std::string& dir, const std::vect
   nlohmann::json err = {
       {"t", nlohmann::json::array()}, {"err", nlohmann::json::array()}, {"dist", nlohmann::json::array()}};
   double dist = 0;
+  const int err_decimals = decimalsFor(ate.stats.max);
   for (std::size_t k = 0; k < ate.errors.size(); ++k) {
     if (k) dist += (gt_assoc[k].p_w_b - gt_assoc[k - 1].p_w_b).norm();
     err["t"].push_back(round3(static_cast<double>(ate.stamps[k] - first_t_ns) * 1e-9));
-    err["err"].push_back(round3(ate.errors[k]));
-    err["dist"].push_back(round3(dist));
+    err["err"].push_back(roundTo(ate.errors[k], err_decimals));
+    err["dist"].push_back(roundTo(dist, decimals));
   }
   run["ate"] = err;
   run["ate_stats"] = {{"rmse", ate.stats.rmse}, {"mean", ate.stats.mean}, {"median", ate.stats.median},
                       {"max", ate.stats.max},   {"n", ate.stats.n},       {"align", "se3"}};
-  run["gt"] = positions(gt, eval::Similarity{}, first_t_ns);
+  run["gt"] = positions(gt, eval::Similarity{}, first_t_ns, decimals);
   run["rpe"] = nlohmann::json::array();
   for (double delta : {1.0, 5.0, 10.0}) {
     try {
@@ -199,7 +223,8 @@ nlohmann::json mapLayers(const std::string& dir, const eval::Similarity& align, 
 
 /// The loop-corrected trajectory (aligned to the ground truth on its own: it may be in a loaded
 /// map's frame), its ATE over time, and the loop events.
-void addLoop(nlohmann::json& run, const std::string& folder, std::int64_t first, eval::Similarity& loop_align) {
+void addLoop(nlohmann::json& run, const std::string& folder, std::int64_t first, eval::Similarity& loop_align,
+             int decimals) {
   const std::vector<StampedPose> lt = io::readTum(folder + "/trajectory_loop.tum");
   if (run.contains("gt")) try {
       const eval::AteResult ate = eval::computeAte(io::readReference(run["gt_source"].get<std::string>()), lt,
@@ -208,12 +233,12 @@ void addLoop(nlohmann::json& run, const std::string& folder, std::int64_t first,
       nlohmann::json err = {{"t", nlohmann::json::array()}, {"err", nlohmann::json::array()}};
       for (std::size_t k = 0; k < ate.errors.size(); ++k) {
         err["t"].push_back(round3(static_cast<double>(ate.stamps[k] - first) * 1e-9));
-        err["err"].push_back(round3(ate.errors[k]));
+        err["err"].push_back(roundTo(ate.errors[k], decimalsFor(ate.stats.max)));
       }
       run["loop_ate"] = err;
     } catch (const std::exception&) {  // no overlap: drawn unaligned
     }
-  run["loop"] = positions(lt, loop_align, first);
+  run["loop"] = positions(lt, loop_align, first, decimals);
   run["loop_events"] = loopEvents(folder + "/loops.csv", first);
 }
 
@@ -233,11 +258,13 @@ nlohmann::json reportRun(const std::string& folder, const ReportOptions& options
   run["ds_hist"] = ds;
   const std::vector<StampedPose> est = io::readTum(folder + "/trajectory.tum");
   eval::Similarity align;
-  addGroundTruth(run, folder, est, first, align, options.groundtruth);
-  run["est"] = positions(est, align, first);
+  const int decimals = decimalsFor(extentOf(est));
+  addGroundTruth(run, folder, est, first, align, options.groundtruth, decimals);
+  run["est"] = positions(est, align, first, decimals);
+  run["position_decimals"] = decimals;
   const bool loop = summary.contains("loop_closure") && summary["loop_closure"].is_object();
   eval::Similarity loop_align;
-  if (loop) addLoop(run, folder, first, loop_align);
+  if (loop) addLoop(run, folder, first, loop_align, decimals);
   run["maps"] = mapLayers(folder, align, loop ? &loop_align : nullptr, options);
   if (fs::exists(folder + "/run.json"))
     run["run"] = readJson(folder + "/run.json");

@@ -55,14 +55,16 @@ LatestState Estimator::latest() const {
   return l;
 }
 
-std::string Estimator::bridgeProblem(TimeNs t1) const {
+std::string Estimator::bridgeProblem(TimeNs t1, bool& imu_only) const {
   const TimeNs t0 = w_.frames[w_.count].t_ns;
   char text[120];
+  imu_only = false;
   if (t1 - t0 > static_cast<TimeNs>(options_.max_frame_gap_s * 1e9)) {
     std::snprintf(text, sizeof(text), "no frame for %.3f s (max_frame_gap %.3f s)", 1e-9 * (t1 - t0),
                   options_.max_frame_gap_s);
     return text;
   }
+  imu_only = true;
   if (w_.imu.empty() || w_.imu.front().t_ns > t0 || w_.imu.back().t_ns < t1) return "no IMU data between frames";
   // The samples the integration uses: the last one at or before t0 to the first at or after t1.
   auto it = std::upper_bound(w_.imu.begin(), w_.imu.end(), t0, [](TimeNs t, const ImuSample& s) { return t < s.t_ns; });
@@ -81,13 +83,18 @@ std::unique_ptr<imu::Preintegration> Estimator::integrate(TimeNs t0, TimeNs t1, 
   return std::make_unique<imu::Preintegration>(imu::integrateBetween(w_.imu, t0, t1, from.ba, from.bg, noise_));
 }
 
-bool Estimator::pushFrame(const frontend::FeatureFrame& ff) {
+bool Estimator::pushFrame(const frontend::FeatureFrame& ff, bool without_imu) {
   const int n = w_.count + 1;
   WindowFrame& f = w_.frames[n];
   f.t_ns = ff.t_ns;
   if (n == 0) {
     f.setNav(imu::NavState{});
     f.pre.reset();
+  } else if (without_imu) {  // no IMU factor: at constant velocity from the previous frame
+    imu::NavState s = w_.frames[n - 1].nav();
+    s.p_w_b += s.v_w * (1e-9 * static_cast<double>(ff.t_ns - w_.frames[n - 1].t_ns));
+    f.pre.reset();
+    f.setNav(s);
   } else {
     const imu::NavState prev = w_.frames[n - 1].nav();
     f.pre = integrate(w_.frames[n - 1].t_ns, ff.t_ns, prev);
@@ -105,16 +112,23 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     r.status = "skipped: time stamp not after the previous frame";
     return r;
   }
-  // A gap the integration cannot bridge ends the segment: this frame starts a new window.
-  if (const std::string why = w_.count >= 0 ? bridgeProblem(ff.t_ns) : std::string(); !why.empty()) {
-    r.reset = w_.initialized;
-    r.reset_why = why;
-    if (w_.initialized)
-      resetAfterFailure();
-    else
-      resetWindow();
+  // A gap the integration cannot bridge ends the segment: this frame starts a new window; an IMU
+  // gap on an initialized stereo rig is carried by the stereo factors (bridge_imu_gaps).
+  bool imu_only = false, without_imu = false;
+  if (const std::string why = w_.count >= 0 ? bridgeProblem(ff.t_ns, imu_only) : std::string(); !why.empty()) {
+    if (imu_only && w_.initialized && rig_.stereo && options_.bridge_imu_gaps) {
+      without_imu = true;
+      r.stereo_only = why;
+    } else {
+      r.reset = w_.initialized;
+      r.reset_why = why;
+      if (w_.initialized)
+        resetAfterFailure();
+      else
+        resetWindow();
+    }
   }
-  r.keyframe = pushFrame(ff);
+  r.keyframe = pushFrame(ff, without_imu);
 
   if (!w_.initialized) {
     if (!initStep(r)) return r;
@@ -134,7 +148,7 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     return r;
   }
   r.initialized = true;
-  if (r.status.empty()) r.status = "tracking";
+  if (r.status.empty()) r.status = r.stereo_only.empty() ? "tracking" : "tracking on stereo alone: " + r.stereo_only;
   r.state = w_.frames[w_.count].nav();
   r.td_s = w_.td_s;
   seg_.last_good = r.state;

@@ -60,7 +60,7 @@ class Estimator {
  private:
   /// Appends the frame to the window: its state predicted with the IMU from the previous one,
   /// its features to the landmarks. Returns whether it is a keyframe (parallax).
-  bool pushFrame(const frontend::FeatureFrame& features);
+  bool pushFrame(const frontend::FeatureFrame& features, bool without_imu);
   void resetWindow();
   /// After a failure: the window, and the offset back to the config's.
   void resetAfterFailure();
@@ -116,8 +116,17 @@ class Estimator {
   void addToStaticMap(const Landmark& lm);
   bool failureDetected(std::string& why) const;
   /// Why frame `t1` cannot be integrated to from the window's newest frame (a frame or IMU gap
-  /// too long, no samples), empty when it can.
-  std::string bridgeProblem(TimeNs t1) const;
+  /// too long, no samples), empty when it can; `imu_only` tells that the frames themselves are
+  /// near enough (the IMU is what is missing: EstimatorOptions::bridge_imu_gaps).
+  std::string bridgeProblem(TimeNs t1, bool& imu_only) const;
+  /// Across an IMU gap (bridge_imu_gaps): the sb blocks (speed, biases) no IMU factor or prior
+  /// reaches are held constant; the first frame an IMU factor reaches again after a gap keeps the
+  /// biases carried across it within the gap's random walk (a bias prior).
+  void holdSpeedBiasesAcrossGaps(ceres::Problem& problem,
+                                 std::vector<std::shared_ptr<ceres::CostFunction>>& costs) const;
+  /// Frames that entered without an IMU factor and whose speed no IMU factor reaches: their
+  /// velocity from the positions around them (what the IMU factors resume from).
+  void velocitiesFromPositions();
   /// After a reset: the new window, just aligned with gravity, moved (yaw and position) onto the
   /// last good state propagated to its oldest frame. Returns how (FrameResult::reanchored).
   std::string reanchor();

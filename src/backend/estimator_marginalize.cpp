@@ -124,12 +124,13 @@ void Estimator::dropSecondNewest() {
       if (w_.prior->blocks.empty()) w_.prior.reset();
     }
   }
-  // One preintegration from frame k-1 to the newest frame.
-  auto merged = integrate(w_.frames[k - 1].t_ns, w_.frames[newest].t_ns, w_.frames[k - 1].nav());
+  // One preintegration from frame k-1 to the newest frame; none across an IMU gap (either part missing).
+  const bool across_gap = !w_.frames[k].pre || !w_.frames[newest].pre;
+  auto merged = across_gap ? nullptr : integrate(w_.frames[k - 1].t_ns, w_.frames[newest].t_ns, w_.frames[k - 1].nav());
   w_.frames[k].t_ns = w_.frames[newest].t_ns;
   w_.frames[k].pose = w_.frames[newest].pose;
   w_.frames[k].sb = w_.frames[newest].sb;
-  w_.frames[k].pre = merged ? std::move(merged) : std::move(w_.frames[newest].pre);
+  w_.frames[k].pre = merged || across_gap ? std::move(merged) : std::move(w_.frames[newest].pre);
   w_.frames[newest].pre.reset();
   w_.fm.removeFrame(k);
   if (w_.prior)

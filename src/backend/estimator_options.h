@@ -72,6 +72,11 @@ struct EstimatorOptions {
   double max_imu_gap_s = 0.1;
   /// Two frames farther apart than this (a camera dropout, a time jump) reset the window.
   double max_frame_gap_s = 1.0;
+  /// An IMU gap (above max_imu_gap, or no samples yet) on an initialized stereo rig: the frame
+  /// enters the window without an IMU factor, held by its stereo projection factors (its speed
+  /// and biases carried, held constant while no IMU factor touches them); the IMU factors resume
+  /// from the state the vision kept. false: the segment ends (a reset), as before.
+  bool bridge_imu_gaps = true;
   /// After a failure the new segment's first window has no marginalization prior: its
   /// biases are tied to the last good state's with these standard deviations until the first
   /// prior forms (0: free, as VINS-Fusion). Without it a window full of traffic can push the
@@ -133,6 +138,9 @@ struct EstimatorOptions {
     v.section("Faults: what the integration between two frames bridges (larger gaps reset the window)");
     v.param({"max_imu_gap", "s, largest gap between two IMU samples", ParamRule::kPositive}, max_imu_gap_s);
     v.param({"max_frame_gap", "s, largest gap between two frames", ParamRule::kPositive}, max_frame_gap_s);
+    v.param({"bridge_imu_gaps",
+             "0/1, an IMU gap on an initialized stereo rig is carried by stereo alone (1) or ends the segment (0)"},
+            bridge_imu_gaps);
     v.param({"reset_bias_prior_acc",
              "m/s^2, after a failure: the accelerometer bias tied to the last good one, if settled (0: free)",
              ParamRule::kNonNegative},

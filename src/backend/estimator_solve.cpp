@@ -36,6 +36,7 @@ void Estimator::optimize(FrameResult& r) {
   // pointed to by the factors and refreshed by the iteration callback below.
   std::deque<CandidateWeight> weights;
   r.landmarks = addProjections(problem, costs, huber, weights, r.candidates);
+  holdSpeedBiasesAcrossGaps(problem, costs);
   // The offset is observable only in motion: held while the oldest frame is slow (as VINS-Fusion).
   if (estimatesTd() && problem.HasParameterBlock(&w_.td_s) && w_.frames[0].nav().v_w.norm() < kMinSpeedForTd)
     problem.SetParameterBlockConstant(&w_.td_s);
@@ -66,9 +67,10 @@ void Estimator::optimize(FrameResult& r) {
   const auto post_start = std::chrono::steady_clock::now();
   if (estimatesRays()) storeRays();
   if (options_.fix_gauge) restoreGauge(T_w_b0_before);
+  velocitiesFromPositions();
   for (int i = 1; i <= w_.count; ++i) {
     const imu::NavState s = w_.frames[i - 1].nav();
-    if (w_.frames[i].pre->needsRepropagation(s.ba, s.bg)) w_.frames[i].pre->repropagate(s.ba, s.bg);
+    if (w_.frames[i].pre && w_.frames[i].pre->needsRepropagation(s.ba, s.bg)) w_.frames[i].pre->repropagate(s.ba, s.bg);
   }
   const auto end = std::chrono::steady_clock::now();
   using Ms = std::chrono::duration<double, std::milli>;
@@ -83,6 +85,45 @@ void Estimator::optimize(FrameResult& r) {
   p.minimizer_ms = 1e3 * summary.minimizer_time_in_seconds;
   p.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
   p.converged = summary.termination_type == ceres::CONVERGENCE;
+}
+
+void Estimator::holdSpeedBiasesAcrossGaps(ceres::Problem& problem,
+                                          std::vector<std::shared_ptr<ceres::CostFunction>>& costs) const {
+  const auto imu_in = [&](int i) { return i >= 1 && w_.frames[i].pre && w_.frames[i].pre->sumDt() <= 10.0; };
+  std::vector<bool> in_prior(static_cast<std::size_t>(w_.count + 1), false);
+  if (w_.prior)
+    for (const double* b : w_.prior->blocks)
+      for (int i = 0; i <= w_.count; ++i)
+        if (b == w_.frames[i].sb.data()) in_prior[i] = true;
+  for (int i = 0; i <= w_.count; ++i) {
+    if (imu_in(i) || in_prior[i]) continue;  // an IMU factor into the frame, or the prior, holds its biases
+    double* sb = const_cast<double*>(w_.frames[i].sb.data());  // the problem holds blocks as mutable
+    if (!(i < w_.count && imu_in(i + 1))) {  // no IMU factor at all: speed and biases carried as they are
+      if (problem.HasParameterBlock(sb) && !(i == 0 && seg_.bias_anchor)) problem.SetParameterBlockConstant(sb);
+      continue;
+    }
+    if (i == 0 && !w_.prior) continue;  // the window's first frame: free, or tied by the bias anchor (as before)
+    // The first IMU factor after a gap: its biases stay those carried across it, within the
+    // random walk of the gap (the one factor alone would trade them for the velocity's error).
+    int k = i - 1;
+    while (k > 0 && !imu_in(k)) --k;
+    const double gap_s = std::max(1e-3, 1e-9 * static_cast<double>(w_.frames[i].t_ns - w_.frames[std::max(k, 0)].t_ns));
+    const imu::NavState s = w_.frames[i].nav();
+    costs.push_back(std::make_shared<BiasPriorFactor>(s.ba, s.bg, std::max(1e-3, noise_.acc_w * std::sqrt(gap_s)),
+                                                      std::max(1e-5, noise_.gyr_w * std::sqrt(gap_s))));
+    problem.AddResidualBlock(costs.back().get(), nullptr, sb);
+  }
+}
+
+void Estimator::velocitiesFromPositions() {
+  for (int i = 1; i <= w_.count; ++i) {
+    const bool in = w_.frames[i].pre != nullptr, out = i < w_.count && w_.frames[i + 1].pre != nullptr;
+    if (in || out) continue;  // an IMU factor estimates this frame's speed
+    imu::NavState s = w_.frames[i].nav();
+    const double dt = 1e-9 * static_cast<double>(w_.frames[i].t_ns - w_.frames[i - 1].t_ns);
+    if (dt > 0) s.v_w = (s.p_w_b - w_.frames[i - 1].nav().p_w_b) / dt;
+    w_.frames[i].setNav(s);
+  }
 }
 
 bool Estimator::finiteAt(const ceres::CostFunction& cost, const std::vector<double*>& blocks) {
@@ -110,7 +151,7 @@ int Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_p
   }
   addBiasAnchor(problem, costs);
   for (int i = 1; i <= w_.count; ++i) {
-    if (w_.frames[i].pre->sumDt() > 10.0) continue;
+    if (!w_.frames[i].pre || w_.frames[i].pre->sumDt() > 10.0) continue;  // across an IMU gap: none
     costs.push_back(std::make_shared<ImuFactor>(w_.frames[i].pre.get()));
     const std::vector<double*> blocks{w_.frames[i - 1].pose.data(), w_.frames[i - 1].sb.data(),
                                       w_.frames[i].pose.data(), w_.frames[i].sb.data()};

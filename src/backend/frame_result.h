@@ -93,6 +93,9 @@ struct FrameResult {
   double td_s = 0;  ///< camera–IMU time offset after this frame (the config's td unless estimate_td)
   /// Why the window was reset at this frame (with `reset`); `status` may say what came next.
   std::string reset_why;
+  /// The IMU gap this frame entered the window across without an IMU factor (bridge_imu_gaps),
+  /// empty when it has one.
+  std::string stereo_only;
   /// The first initialized frame after a reset: the new segment was put in the world frame of
   /// the last good state, propagated to it with the IMU ("imu"); across an IMU gap of at most
   /// max_frame_gap at constant velocity ("extrapolated"), across a longer one (a time jump, a

@@ -158,10 +158,15 @@ nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
                       {"why", e.why},
                       {"resumed_t_ns", e.resumed_t_ns},
                       {"continued_by", e.continued_by}});
+  std::vector<StampedPose> poses;  // the estimate's own path, with or without ground truth
+  for (const auto& p : r.trajectory) poses.push_back(toStampedPose(p));
+  const double est_s = poses.size() > 1 ? toSeconds(poses.back().t_ns - poses.front().t_ns) : 0.0;
   return {
       {"frames", s.frames},
       {"mode", toString(mode)},
       {"sequence_s", seq_s},
+      {"estimate_path_length_m", poses.size() > 1 ? eval::pathLength(poses) : 0.0},
+      {"estimate_duration_s", est_s},
       {"wall_s", wall_s},
       {"realtime_factor", seq_s / wall_s},
       {"mean_tracking_ms", s.sum_tracking_ms / n},
@@ -176,6 +181,7 @@ nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
       {"initialized_at_s", s.init_t_ns >= 0 ? toSeconds(s.init_t_ns - s.first_t_ns) : -1.0},
       {"frames_without_prior", s.frames_without_prior},
       {"frames_beyond_imu", s.frames_beyond_imu},
+      {"frames_stereo_only", s.frames_stereo_only},
       {"imu_samples_dropped",
        {{"out_of_range", s.imu_out_of_range}, {"out_of_order", s.imu_out_of_order}, {"spikes", s.imu_spike_samples}}},
       {"imu_spikes", s.imu_spikes},

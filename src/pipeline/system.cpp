@@ -355,6 +355,7 @@ void System::account(FrameOutput& out) {
     s.resets.back().continued_by = r.reanchored;
   }
   if (out.idy && !out.idy->prior_valid) ++s.frames_without_prior;
+  if (!r.stereo_only.empty()) ++s.frames_stereo_only;
   s.sum_tracking_ms += out.features.tracking_ms;
   s.lost_tracks += out.features.lost_tracks;
   s.lost_new += out.features.lost_new;

@@ -86,6 +86,7 @@ struct Summary {
   TimeNs first_t_ns = 0, last_t_ns = 0;  ///< time stamps of the first and last frame
   TimeNs init_t_ns = -1;                 ///< first initialized frame (-1: never)
   std::size_t frames_without_prior = 0;  ///< idy modes: frames the IDY filter saw without a motion prior
+  std::size_t frames_stereo_only = 0;    ///< frames carried across an IMU gap by stereo alone (bridge_imu_gaps)
   std::size_t lost_tested = 0, lost_moving = 0;  ///< lost-corner test totals (DESIGN §4.9)
   frontend::TrackLosses lost_tracks, lost_new;   ///< why tracks ended, summed (FeatureFrame)
   double sum_tracking_ms = 0, sum_filter_ms = 0, sum_optimization_ms = 0, sum_marginalization_ms = 0;

@@ -100,6 +100,33 @@ try {
   } else {
     check(missing.length === 0 && ate_charts === 2, `ground-truth panels drawn (${ate_charts} ATE charts)`);
   }
+  // Drawings that follow the motion's size (a 1 cm run is neither a vertical line nor a staircase).
+  const tum = readFileSync(resolve(runs[0], 'trajectory.tum'), 'utf8').split('\n')
+    .filter((l) => l.trim() && !l.startsWith('#')).map((l) => l.trim().split(/\s+/).map(Number));
+  const span = (v) => Math.max(...v) - Math.min(...v);
+  const [sx, sy] = [span(tum.map((r) => r[1])), span(tum.map((r) => r[2]))];
+  const top = await page.evaluate(() => {
+    const line = document.querySelector('svg.topview polyline[stroke="#1f77b4"]');
+    const b = line ? line.getBBox() : { width: 0, height: 0 };
+    const note = document.querySelector('svg.topview').parentElement.querySelector('[data-span-m]');
+    return { w: b.width, h: b.height, note: note ? note.textContent : '', span: note ? +note.dataset.spanM : 0 };
+  });
+  check(Math.min(top.w, top.h) >= 2, `top view: the estimate spans ${top.w.toFixed(1)} x ${top.h.toFixed(1)} px, not a line`);
+  if (no_gt) {  // unaligned: the drawing keeps the file's proportions
+    const want = Math.min(sx, sy) / Math.max(sx, sy), got = Math.min(top.w, top.h) / Math.max(top.w, top.h);
+    check(Math.abs(got - want) < 0.05 + 0.1 * want, `top view proportions ${got.toFixed(3)} as trajectory.tum's ${want.toFixed(3)}`);
+  }
+  check(top.span > 0 && !/ 0\.0 m /.test(top.note), `top view scale: '${top.note}'`);
+  const distinct = (v) => new Set(v.map((x) => Math.round(x * 1e7))).size;
+  const page_z = await page.evaluate(() => window.idyReport.data.runs[0].est.z);
+  const file_z = tum.map((r) => r[3]);
+  check(distinct(page_z) >= 0.5 * distinct(file_z), `height: ${distinct(page_z)} distinct z values on the page, ${distinct(file_z)} in trajectory.tum`);
+  const tracked = await page.$$eval('figcaption', (es) => es.filter((e) => e.textContent.endsWith('features tracked per frame')).length);
+  check(tracked === runs.length, `features tracked per frame (all, with a right match, new): ${tracked} charts`);
+  const views = await page.evaluate(() => window.idyReport.viewers.map((v) => ({ cell: v.cell, est: v.layers.includes('est'), ends: v.layers.includes('est_ends') })));
+  const scales = await page.$$eval('.viewer .scale', (es) => es.map((e) => e.textContent));
+  views.forEach((v, i) => check(v.cell > 0 && v.est && v.ends && (scales[i] || '').startsWith('grid cells'),
+    `3D view ${i}: grid of ${v.cell} m cells, axes, the trajectory and its ends drawn ('${scales[i]}')`));
   await page.screenshot({ path: `${shot_prefix}page.png`, fullPage: true });
   await page.locator('#summary').screenshot({ path: `${shot_prefix}summary.png` });
   await page.locator('#trajectory').screenshot({ path: `${shot_prefix}trajectory.png` });

@@ -1,6 +1,6 @@
 // Time-series and histogram charts (uPlot), and the SVG top view.
 import uPlot from 'uplot';
-import { el } from './util.js';
+import { el, fmtLength } from './util.js';
 
 // Vertical marks (initialization, resets) drawn over a chart: [{x, color, label}].
 function marksPlugin(marks) {
@@ -79,7 +79,7 @@ export function topView(parent, title, paths, size = 420) {
       lo = [Math.min(lo[0], p.x[i]), Math.min(lo[1], p.y[i])];
       hi = [Math.max(hi[0], p.x[i]), Math.max(hi[1], p.y[i])];
     }
-  const span = Math.max(hi[0] - lo[0], hi[1] - lo[1], 1e-3) * 1.08;
+  const span = Math.max(hi[0] - lo[0], hi[1] - lo[1], 1e-6) * 1.08;
   const cx = (lo[0] + hi[0]) / 2;
   const cy = (lo[1] + hi[1]) / 2;
   const px = (x) => ((x - cx) / span + 0.5) * size;
@@ -102,7 +102,7 @@ export function topView(parent, title, paths, size = 420) {
     if (p.dash) line.setAttribute('stroke-dasharray', p.dash);
     svg.append(line);
   }
-  const scale = el('div', { class: 'note', text: `x → right, y → up; the square is ${span.toFixed(1)} m wide` });
+  const scale = el('div', { class: 'note', 'data-span-m': span, text: `x → right, y → up; the square is ${fmtLength(span)} wide` });
   const legend = el('div', { class: 'legend' }, ...paths.map((p) => el('span', { style: `color:${p.color}`, text: `— ${p.label} ` })));
   box.append(svg, legend, scale);
   return svg;

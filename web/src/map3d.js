@@ -30,7 +30,31 @@ function lineObject(path, layer) {
   return new THREE.Line(g, new THREE.LineBasicMaterial({ color: layer.color }));
 }
 
-// A viewer in `parent` for run `run`; returns {canvas, setLayer(key, on), render(), layers, points}.
+// A marker (points of `size` px whatever the zoom) at the trajectory's start and end: a run that
+// moved a centimetre among a map metres wide still shows where it went.
+function endsObject(path, color) {
+  const n = path.x.length - 1;
+  const flat = [path.x[0], path.y[0], path.z[0], path.x[n], path.y[n], path.z[n]];
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.Float32BufferAttribute(flat, 3));
+  return new THREE.Points(g, new THREE.PointsMaterial({ color, size: 9, sizeAttenuation: false }));
+}
+
+// A grid in the plane z = `z` around `center` with cells of a round size (1, 2 or 5 x 10^k m) that
+// fit about ten to `radius`, and the world axes at the origin (x red, y green, z blue), a cell long.
+function gridAndAxes(center, radius, z) {
+  const raw = radius / 5;
+  const pow = 10 ** Math.floor(Math.log10(raw));
+  const cell = [1, 2, 5, 10].map((k) => k * pow).find((c) => c >= raw);
+  const divisions = Math.min(200, 2 * Math.ceil((2 * radius) / cell));
+  const grid = new THREE.GridHelper(divisions * cell, divisions, 0xb0b0b0, 0xe0e0e0);
+  grid.rotation.x = Math.PI / 2;  // GridHelper lies in x-z; the world's ground is x-y (z up)
+  grid.position.set(Math.round(center.x / cell) * cell, Math.round(center.y / cell) * cell, z);
+  const axes = new THREE.AxesHelper(cell);
+  return { grid, axes, cell };
+}
+
+// A viewer in `parent` for run `run`; returns {canvas, setLayer(key, on), render(), layers, points, cell}.
 export function createViewer(parent, run, width, height) {
   const renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
   renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
@@ -58,11 +82,22 @@ export function createViewer(parent, run, width, height) {
     dist.push(Math.hypot(flat[i] - center.x, flat[i + 1] - center.y, flat[i + 2] - center.z));
   dist.sort((a, b) => a - b);
   const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, dist.length ? dist[dist.length >> 1] : 0, 1);
-  const camera = new THREE.PerspectiveCamera(50, width / height, radius / 100, radius * 40);
+  const ground = run.est && run.est.z.length ? Math.min(...run.est.z) : box.min.z;
+  const { grid, axes, cell } = gridAndAxes(center, radius, ground);
+  scene.add(grid, axes);
+  if (run.est && run.est.x.length > 0) {
+    objects.est_ends = endsObject(run.est, LAYERS.find((l) => l.key === 'est').color);
+    scene.add(objects.est_ends);
+  }
+  const camera = new THREE.PerspectiveCamera(50, width / height, radius / 1000, radius * 40);
   camera.up.set(0, 0, 1);
   camera.position.copy(center).add(new THREE.Vector3(-1.2 * radius, -1.6 * radius, 1.4 * radius));
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.target.copy(center);
+  parent.append(Object.assign(document.createElement('p'), {
+    className: 'note scale',
+    textContent: `grid cells ${cell < 1 ? `${+(cell * 100).toFixed(3)} cm` : `${cell} m`}; axes at the world origin, a cell long (x red, y green, z blue); blue line and dots: the trajectory, its start and end`,
+  }));
   const render = () => renderer.render(scene, camera);
   controls.addEventListener('change', render);
   controls.update();
@@ -71,8 +106,10 @@ export function createViewer(parent, run, width, height) {
     canvas: renderer.domElement,
     layers: Object.keys(objects),
     points,
+    cell,
     setLayer(key, on) {
       if (objects[key]) objects[key].visible = on;
+      if (key === 'est' && objects.est_ends) objects.est_ends.visible = on;
       render();
     },
     render,

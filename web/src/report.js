@@ -3,7 +3,7 @@
 // exposes the viewers and a `ready` flag to the browser test (tests/report/browser_test.mjs).
 import 'uplot/dist/uPlot.min.css';
 import './report.css';
-import { el, fmt, statCell, chi2Bin, RUN_COLORS } from './util.js';
+import { el, fmt, statCell, chi2Bin, decimalsFor, RUN_COLORS } from './util.js';
 import { lineChart, topView } from './charts.js';
 import { createViewer, LAYERS } from './map3d.js';
 
@@ -45,7 +45,9 @@ function summaryTable() {
     ['ATE RMSE (m, SE(3)-aligned)', 'summary.ate_rmse_m', 3],
     ['ATE of trajectory_loop.tum (m)', 'summary.loop_closure.ate_rmse_m', 3],
     ['loops closed', 'summary.loop_closure.loops', 0],
-    ['path length (m)', 'summary.path_length_m', 1],
+    ['path length (m, ground truth)', 'summary.path_length_m', 1],
+    ['estimate: path length (m)', 'summary.estimate_path_length_m', 'auto'],
+    ['estimate: duration (s)', 'summary.estimate_duration_s', 2],
     ['frames', 'summary.frames', 0],
     ['resets', 'summary.resets.length', 0],
     ['initialized at (s)', 'summary.initialized_at_s', 2],
@@ -65,6 +67,9 @@ function summaryTable() {
       else if (path === null) {
         const c = r.summary.classification;
         tr.append(c ? el('td', { text: `${fmt(c.precision)} / ${fmt(c.recall)} / ${fmt(c.f1)}` }) : el('td', { text: '–' }));
+      } else if (digits === 'auto') {  // small runs (1 cm of motion) keep their digits
+        const vals = runs.map((q) => path.split('.').reduce((o, k) => (o == null ? undefined : o[k]), q));
+        tr.append(statCell(r, i, path, decimalsFor(Math.max(...vals.filter((v) => typeof v === 'number')), 1), scale || 1));
       } else tr.append(statCell(r, i, path, digits, scale || 1));
     });
     table.append(tr);
@@ -87,6 +92,16 @@ function trajectorySection() {
     if (r.loop) paths.push({ label: `${r.name} loop-corrected`, x: r.loop.x, y: r.loop.y, color: color(i), dash: '4 3' });
   });
   topView(grid, withGt.length ? 'Top view, estimates aligned to the ground truth (SE(3))' : 'Top view (odometry frame)', paths);
+  // Tracked features of every run (the front end, any mode): all, with a right match, new corners.
+  runs.forEach((r, i) => {
+    const f = r.frames;
+    if (!f.features_right || f.features_right.every((v) => v === null)) return;
+    lineChart(grid, `${r.name}: features tracked per frame`, [
+      { label: 'tracked', x: f.t, y: f.features, color: color(i), width: 2 },
+      { label: 'with a right match', x: f.t, y: f.features_right, color: '#2ca02c' },
+      { label: 'new corners', x: f.t, y: f.features_new, color: '#ff7f0e' },
+    ], { ylabel: 'features', marks: marks() });
+  });
   const height = runs.map((r, i) => ({ label: r.name, x: r.est.t, y: r.est.z, color: color(i) }));
   if (withGt.length) height.unshift({ label: 'ground truth', x: withGt[0].gt.t, y: withGt[0].gt.z, color: '#111' });
   lineChart(grid, 'Height z over time', height, { ylabel: 'z (m)', marks: marks() });
@@ -168,7 +183,7 @@ function dynamicSection() {
       { label: 'CV after', x: f.t, y: f.cv_after, color: '#1f77b4' },
       { label: '√2', x: f.t, y: sqrt2, color: '#111', dash: [6, 4] },
     ], { ylabel: 'CV', marks: marks() });
-    lineChart(grid, `${r.name}: features per frame`, [
+    lineChart(grid, `${r.name}: dynamic features per frame`, [
       { label: 'eliminated', x: f.t, y: f.eliminated, color: '#e61e1e' },
       { label: 'new candidates', x: f.t, y: f.candidates, color: '#ff9600' },
       { label: 'confirmed dynamic (window)', x: f.t, y: f.confirmed_dynamic, color: '#8c564b' },

@@ -23,6 +23,20 @@ export function fmt(v, digits = 3) {
   return v.toFixed(digits);
 }
 
+// A length with a unit that suits it: "0.4 mm", "1.2 cm", "3.5 m", "1.2 km" (two significant digits at least).
+export function fmtLength(m) {
+  if (typeof m !== 'number' || !isFinite(m)) return '–';
+  const a = Math.abs(m);
+  const [v, unit] = a < 0.01 ? [m * 1000, 'mm'] : a < 1 ? [m * 100, 'cm'] : a < 1000 ? [m, 'm'] : [m / 1000, 'km'];
+  return `${Math.abs(v) < 10 ? v.toFixed(1) : v.toFixed(0)} ${unit}`;
+}
+
+// Decimals that show a value to about three significant digits (at least `min`).
+export function decimalsFor(v, min = 1) {
+  if (typeof v !== 'number' || !isFinite(v) || v === 0) return min;
+  return Math.max(min, Math.min(7, 2 - Math.floor(Math.log10(Math.abs(v)))));
+}
+
 // A cell showing stats.json's value at `path` of run `i`: data-stat lets the browser test compare
 // the text with the file, data-scale the unit change (0.01 for percentages shown ×100).
 export function statCell(run, i, path, digits = 3, scale = 1) {
