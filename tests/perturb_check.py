@@ -69,6 +69,61 @@ def largest_excess(est, gt_csv):
     return max([dist(b[1:4], a[1:4]) - dist(at(b[0]), at(a[0])) for a, b in zip(est, est[1:])] or [0.0])
 
 
+def matrices(cfg):
+    """body_T_cam0 and body_T_cam1 of a VINS-Fusion config (4 x 4, row-major lists)."""
+    import yaml  # Debian's python3-yaml; the opencv-matrix tag read as a plain mapping
+    yaml.SafeLoader.add_constructor("tag:yaml.org,2002:opencv-matrix", yaml.SafeLoader.construct_mapping)
+    text = open(cfg).read().replace("%YAML:1.0", "")
+    d = yaml.safe_load(text)
+    import numpy as np
+    return [np.array(d["body_T_cam%d" % i]["data"], dtype=float).reshape(4, 4) for i in (0, 1)]
+
+
+def calibration_faults(idy, work, seq, cfg):
+    """time-offset and extrinsic: what they write, checked against the source."""
+    import numpy as np
+    data = os.path.join(work, "time-offset")
+    p = subprocess.run([idy, "perturb", seq, data, "--fault", "time-offset", "--magnitude", "30"], capture_output=True,
+                       text=True)
+    check(p.returncode == 0, "perturb time-offset: " + p.stderr.strip()[-200:])
+    for sub in ["cam0", "cam1", "imu0", "state_groundtruth_estimate0"]:
+        a = [l.split(",")[0] for l in open(os.path.join(seq, "mav0", sub, "data.csv")) if not l.startswith("#")]
+        b = [l.split(",")[0] for l in open(os.path.join(data, "mav0", sub, "data.csv")) if not l.startswith("#")]
+        shift = 30_000_000 if sub.startswith("cam") else 0
+        check(len(a) == len(b) and all(int(x) - int(y) == shift for x, y in zip(a, b)),
+              "time-offset 30 ms: %s stamps %s" % (sub, "30 ms earlier" if shift else "unchanged"))
+    check(json.load(open(os.path.join(data, "perturb.json")))["td_true_ms"] == 30, "perturb.json: td_true_ms 30")
+    truth = matrices(cfg)
+    source_bytes = open(cfg, "rb").read()
+    for camera in ["rig", "1"]:
+        data = os.path.join(work, "extrinsic-" + camera)
+        p = subprocess.run([idy, "perturb", seq, data, "--fault", "extrinsic", "--config", cfg, "--camera", camera,
+                            "--rotation-deg", "3", "--translation-cm", "3"], capture_output=True, text=True)
+        check(p.returncode == 0, "perturb extrinsic %s: %s" % (camera, p.stderr.strip()[-200:]))
+        if p.returncode != 0:
+            continue
+        got = matrices(os.path.join(data, "config", os.path.basename(cfg)))
+        for i in (0, 1):
+            err = got[i] @ np.linalg.inv(truth[i])
+            angle = np.degrees(np.arccos(np.clip((np.trace(err[:3, :3]) - 1) / 2, -1, 1)))
+            moved = camera == "rig" or camera == str(i)
+            # err = T_err * T - T: rotation 3 deg; translation 3 cm plus the rotation's lever on the camera's position
+            want_t = np.linalg.norm(err[:3, 3]) > 0.0 if moved else True
+            check((abs(angle - 3) < 1e-6 if moved else angle < 1e-9) and want_t,
+                  "extrinsic %s: body_T_cam%d %s (%.6f deg)" % (camera, i, "3 deg off" if moved else "unchanged", angle))
+        stereo = [np.linalg.inv(m[0]) @ m[1] for m in (truth, got)]
+        kept = np.allclose(stereo[0], stereo[1], atol=1e-9)
+        check(kept == (camera == "rig"), "extrinsic %s: the stereo pair's relative pose %s" % (
+            camera, "kept" if camera == "rig" else "changed"))
+        r = subprocess.run([idy, "run", "-c", os.path.join(data, "config", os.path.basename(cfg)), "-d", data, "-o",
+                            data + "_out", "--mode", "baseline"], capture_output=True, text=True)
+        check(r.returncode in (0, 4), "extrinsic %s: the perturbed config runs (exit %d)" % (camera, r.returncode))
+    check(open(cfg, "rb").read() == source_bytes, "extrinsic: the source config unchanged (no write through a hard link)")
+    p = subprocess.run([idy, "perturb", seq, os.path.join(work, "no-config"), "--fault", "extrinsic"],
+                       capture_output=True, text=True)
+    check(p.returncode != 0 and "needs the config" in p.stderr, "extrinsic without --config refused: " + p.stderr.strip())
+
+
 def main(idy, work, table):
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
@@ -122,6 +177,7 @@ def main(idy, work, table):
                   "%s: one spike of 5 samples dropped and said so" % name)
         else:
             check(spiked == 0, "%s: no IMU spike found (%d samples)" % (name, spiked))
+    calibration_faults(idy, work, seq, cfg)
     if table:
         print("| fault (at 4 s) | resets: cause -> how it went on | ATE whole file | ATE per segment | largest step beyond the truth's |")
         print("| --- | --- | --- | --- | --- |")

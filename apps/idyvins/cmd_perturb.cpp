@@ -2,6 +2,7 @@
 // meets (sensor dropouts, time jumps, bad images, IMU spikes), to reproduce how idyvins handles
 // it. Unchanged files are hard links to the original's (no space, never written through).
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -14,6 +15,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "config/config.h"
 #include "core/error.h"
 #include "io/euroc_dataset.h"
 #include "io/output_folder.h"
@@ -23,15 +25,20 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::vector<std::string> kFaults = {"imu-gap", "silence",          "frame-drop", "time-jump",
-                                          "desync",  "duplicate-stamps", "black",      "saturated",
-                                          "frozen",  "corrupt",          "salt",       "imu-spike"};
+const std::vector<std::string> kFaults = {
+    "imu-gap",   "silence", "frame-drop", "time-jump", "desync",    "duplicate-stamps", "black",
+    "saturated", "frozen",  "corrupt",    "salt",      "imu-spike", "time-offset",      "extrinsic"};
 
 struct PerturbArgs {
   std::string dataset, out, fault;
   double at_s = 4.0, duration_s = 0.5, magnitude = 0;  ///< checkedArgs: --magnitude or the fault's default
   std::optional<double> magnitude_given;               ///< --magnitude
   int count = 1;
+  /// extrinsic: the config whose body_T_cam0/1 are perturbed (its folder copied into OUT/config),
+  /// the rotation (degrees, about a fixed tilted axis) and translation (cm, along a fixed tilted
+  /// direction) of the error, and which camera: 0, 1 or rig (both, their stereo pose kept).
+  std::string config, camera = "rig";
+  double rotation_deg = 2.0, translation_cm = 2.0;
 };
 
 /// A data.csv: its comment lines, and its rows split at commas (field 0 the stamp).
@@ -168,6 +175,11 @@ void applyFault(const PerturbArgs& a, const fs::path& mav0, TimeNs t0) {
       editCsv(p, [&](Csv& c) { shiftRows(c, from_at, by); });
   }
   if (f == "desync") editCsv(cam1, [&](Csv& c) { shiftRows(c, in_window, static_cast<TimeNs>(a.magnitude * 1e6)); });
+  if (f == "time-offset")  // every image stamp MAGNITUDE ms early on the IMU clock: a config's td of MAGNITUDE is right
+    cams([&](Csv& c) {
+      shiftRows(
+          c, [](TimeNs) { return true; }, -static_cast<TimeNs>(std::llround(a.magnitude * 1e6)));
+    });
   if (f == "duplicate-stamps") {  // each frame of the window stamped like the one before it
     cams([&](Csv& c) {
       for (std::size_t i = 1; i < c.rows.size(); ++i)
@@ -191,8 +203,11 @@ struct Magnitude {
   double fallback;
   const char* unit;
 };
-constexpr Magnitude kMagnitudes[] = {
-    {"time-jump", 0.5, "s"}, {"desync", 5.0, "ms"}, {"imu-spike", 98.0, "m/s^2"}, {"salt", 10.0, "%"}};
+constexpr Magnitude kMagnitudes[] = {{"time-jump", 0.5, "s"},
+                                     {"desync", 5.0, "ms"},
+                                     {"imu-spike", 98.0, "m/s^2"},
+                                     {"salt", 10.0, "%"},
+                                     {"time-offset", 30.0, "ms"}};
 
 /// The arguments with the fault's magnitude filled in, checked against the dataset. Throws.
 PerturbArgs checkedArgs(PerturbArgs a, const io::EurocDataset& ds) {
@@ -209,11 +224,59 @@ PerturbArgs checkedArgs(PerturbArgs a, const io::EurocDataset& ds) {
   if (m && std::string(m->unit) == "s" && std::abs(a.magnitude) > 1e6)
     throw CLI::ValidationError("--magnitude", "time-jump: expected at most 1e6 s");
   if (!m) a.magnitude = 0;
+  if ((a.fault == "extrinsic") != !a.config.empty())
+    throw CLI::ValidationError("--config", a.fault == "extrinsic" ? "extrinsic needs the config to perturb"
+                                                                  : "only the extrinsic fault takes a config");
+  if (a.fault == "extrinsic" && a.camera != "0" && a.camera != "1" && a.camera != "rig")
+    throw CLI::ValidationError("--camera", "expected 0, 1 or rig, got '" + a.camera + "'");
   const double span_s = 1e-9 * static_cast<double>(ds.cam0.back().t_ns - ds.cam0.front().t_ns);
   if (a.at_s > span_s)
     throw CLI::ValidationError("--at", "expected a time within the sequence (0 to " + std::to_string(span_s) +
                                            " s from the first cam0 image), got " + std::to_string(a.at_s));
   return a;
+}
+
+/// `text` with the data of the opencv-matrix under `key` replaced by `T` (row-major, 4 x 4).
+std::string withMatrix(const std::string& text, const std::string& key, const Eigen::Isometry3d& T,
+                       const std::string& path) {
+  const std::size_t k = text.find("\n" + key + ":");
+  const std::size_t open = k == std::string::npos ? k : text.find('[', text.find("data:", k));
+  const std::size_t close = open == std::string::npos ? open : text.find(']', open);
+  if (close == std::string::npos) throw InputError(path, "no " + key + " matrix (data: [...]) to perturb");
+  std::string data;
+  char buf[40];
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) {
+      std::snprintf(buf, sizeof buf, "%.12g", T.matrix()(r, c));
+      data += std::string(r || c ? ", " : "") + buf;
+    }
+  return text.substr(0, open + 1) + data + text.substr(close);
+}
+
+/// extrinsic: OUT/config, a copy of the config's folder with body_T_cam0/1 moved against the IMU by
+/// the error; returns the error (T_err: true body_T_cam = T_err^-1 * written).
+Eigen::Isometry3d perturbExtrinsics(const PerturbArgs& a) {
+  const Config cfg = loadConfig(a.config);
+  const fs::path src = fs::path(a.config).parent_path(), dst = fs::path(a.out) / "config";
+  fs::create_directories(dst);
+  for (const auto& e : fs::directory_iterator(src.empty() ? fs::path(".") : src))
+    if (e.is_regular_file()) {  // a file already there is a hard link into the source: replaced, never written through
+      fs::remove(dst / e.path().filename());
+      fs::copy_file(e.path(), dst / e.path().filename());
+    }
+  Eigen::Isometry3d T_err = Eigen::Isometry3d::Identity();
+  T_err.linear() = Eigen::AngleAxisd(a.rotation_deg * M_PI / 180, Eigen::Vector3d(1, -1, 1).normalized()).matrix();
+  T_err.translation() = 0.01 * a.translation_cm * Eigen::Vector3d(1, 1, -1).normalized();
+  const fs::path out_cfg = dst / fs::path(a.config).filename();
+  std::ifstream in(out_cfg);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  for (std::size_t i = 0; i < cfg.T_b_c.size(); ++i)
+    if (a.camera == "rig" || a.camera == std::to_string(i))
+      text = withMatrix(text, "body_T_cam" + std::to_string(i), T_err * cfg.T_b_c[i], a.config);
+  fs::remove(out_cfg);
+  std::ofstream(out_cfg) << text;
+  loadConfig(out_cfg.string());  // what was written reads back
+  return T_err;
 }
 
 int runPerturb(const PerturbArgs& args) {
@@ -225,8 +288,16 @@ int runPerturb(const PerturbArgs& args) {
   fs::copy(a.dataset, a.out, fs::copy_options::recursive | fs::copy_options::create_hard_links);
   const fs::path mav0 = fs::path(ds.root).filename() == "mav0" ? fs::path(a.out) / "mav0" : fs::path(a.out);
   applyFault(a, mav0, ds.cam0.front().t_ns);
-  const nlohmann::json what = {{"source", a.dataset},        {"fault", a.fault}, {"at_s", a.at_s},
-                               {"duration_s", a.duration_s}, {"count", a.count}, {"magnitude", a.magnitude}};
+  nlohmann::json what = {{"source", a.dataset},        {"fault", a.fault}, {"at_s", a.at_s},
+                         {"duration_s", a.duration_s}, {"count", a.count}, {"magnitude", a.magnitude}};
+  if (a.fault == "time-offset") what["td_true_ms"] = a.magnitude;
+  if (a.fault == "extrinsic") {
+    perturbExtrinsics(a);
+    what["config"] = (fs::path(a.out) / "config" / fs::path(a.config).filename()).string();
+    what["camera"] = a.camera;
+    what["rotation_deg"] = a.rotation_deg;
+    what["translation_cm"] = a.translation_cm;
+  }
   std::ofstream(fs::path(a.out) / "perturb.json") << what.dump(1) << '\n';
   std::printf("wrote %s: %s at %.3f s into the sequence\n", a.out.c_str(), a.fault.c_str(), a.at_s);
   return kOk;
@@ -246,7 +317,10 @@ void registerPerturb(CLI::App& app, int& exit_code) {
       "frames lose their partner); duplicate-stamps (frames of the window stamped like the one before);\n"
       "black, saturated, frozen (images of the window), salt (MAGNITUDE %, default 10, of their pixels\n"
       "black or white), corrupt (their PNG files cut in half); imu-spike (COUNT samples from at get MAGNITUDE m/s^2 "
-      "more on x).\n"
+      "more on x);\n"
+      "time-offset (every image stamp MAGNITUDE ms, default 30, earlier: the config's td should be MAGNITUDE);\n"
+      "extrinsic (--config CFG: OUT/config/ is CFG's folder with body_T_cam0/1 off by --rotation-deg about\n"
+      "(1,-1,1) and --translation-cm along (1,1,-1), for --camera 0, 1 or rig; the data unchanged).\n"
       "Writes OUT/perturb.json with the fault.");
   cmd->add_option("dataset", a->dataset, "EuRoC folder")->required();
   cmd->add_option("out", a->out, "new folder")->required();
@@ -256,7 +330,11 @@ void registerPerturb(CLI::App& app, int& exit_code) {
   cmd->add_option("--count", a->count, "frames or samples (default 1)")->check(CLI::PositiveNumber);
   cmd->add_option("--magnitude", a->magnitude_given,
                   "time-jump: s (default 0.5); desync: ms (default 5); imu-spike: m/s^2 (default 98, 10 g);\n"
-                  "salt: % (default 10); finite and non-zero");
+                  "salt: % (default 10); time-offset: ms (default 30); finite and non-zero");
+  cmd->add_option("--config", a->config, "extrinsic: the config to perturb");
+  cmd->add_option("--rotation-deg", a->rotation_deg, "extrinsic: rotation error, degrees (default 2)");
+  cmd->add_option("--translation-cm", a->translation_cm, "extrinsic: translation error, cm (default 2)");
+  cmd->add_option("--camera", a->camera, "extrinsic: 0, 1 or rig (default: both, the stereo pose kept)");
   cmd->callback([a, &exit_code] { exit_code = runPerturb(*a); });
 }
 
