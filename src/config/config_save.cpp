@@ -2,6 +2,7 @@
 // Markdown key table (docs/cli.md).
 
 #include <charconv>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -14,6 +15,8 @@
 namespace idyvins {
 
 namespace {
+
+namespace fs = std::filesystem;
 
 /// The shortest decimal text that reads back as the same double.
 std::string number(double v) {

@@ -81,7 +81,11 @@ void checkImageFormat(const BagImage& m) {
 
 /// An uncompressed image wrapped (not copied) as CV_8UC(channels).
 cv::Mat wrapped(const BagImage& m, int ch) {
-  if (m.step < m.width * static_cast<std::uint32_t>(ch) || m.size < static_cast<std::size_t>(m.step) * m.height)
+  constexpr std::uint32_t kMaxSide = 1u << 16;  // beyond any camera; keeps OpenCV's int sizes exact
+  if (m.width == 0 || m.height == 0 || m.width > kMaxSide || m.height > kMaxSide)
+    throw BagMessageError("an image of " + std::to_string(m.width) + "x" + std::to_string(m.height) + " pixels");
+  if (m.step < static_cast<std::uint64_t>(m.width) * static_cast<std::uint64_t>(ch) ||
+      m.size < static_cast<std::size_t>(m.step) * m.height)
     throw BagMessageError("image data is shorter than height x step");
   return cv::Mat(static_cast<int>(m.height), static_cast<int>(m.width), CV_8UC(ch), const_cast<std::uint8_t*>(m.data),
                  m.step);

@@ -178,11 +178,20 @@ void McapReader::readChunk(const Record& r) {
     fail(r.offset, "the chunk claims " + std::to_string(uncompressed) + " bytes uncompressed (more than 1 GiB)");
   const std::string name = compression.empty() ? "none" : compression;
   if (std::find(compressions_.begin(), compressions_.end(), name) == compressions_.end()) compressions_.push_back(name);
-  chunk_.resize(static_cast<std::size_t>(uncompressed));
   const std::uint8_t* src = f.here();
   const std::size_t n = static_cast<std::size_t>(records);
+  // The size claimed, checked against what the compressed data can hold before it is allocated.
+  if (compression.empty() && n != uncompressed)
+    fail(r.offset, "an uncompressed chunk whose size differs from its records'");
+  if (compression == "zstd") {
+    const unsigned long long content = ZSTD_getFrameContentSize(src, n);  // the first frame's, when it says
+    if (content == ZSTD_CONTENTSIZE_ERROR || (content != ZSTD_CONTENTSIZE_UNKNOWN && content > uncompressed))
+      fail(r.offset, "the zstd chunk's frame does not fit the " + std::to_string(uncompressed) + " bytes it claims");
+  }
+  if (compression == "lz4" && uncompressed > 256 * static_cast<std::uint64_t>(n) + 4096)
+    fail(r.offset, "the lz4 chunk cannot hold the " + std::to_string(uncompressed) + " bytes it claims");
+  chunk_.resize(static_cast<std::size_t>(uncompressed));
   if (compression.empty()) {
-    if (n != uncompressed) fail(r.offset, "an uncompressed chunk whose size differs from its records'");
     std::copy(src, src + n, chunk_.begin());
   } else if (compression == "zstd") {
     const std::size_t got = ZSTD_decompress(chunk_.data(), chunk_.size(), src, n);

@@ -1,6 +1,7 @@
 // VIODE's segmentation colours (io/bag_dataset.h): the colour tables and the masks made with them.
 
 #include <fstream>
+#include <map>
 #include <opencv2/core.hpp>
 
 #include "core/error.h"
