@@ -626,6 +626,27 @@ TEST(PipelineSystem, RejectsConfigsAndFramesItCannotRun) {
   EXPECT_THROW(seg.addFrame(frame), InputError) << "seg mode without a mask";
   EXPECT_THROW((System{sim::rigConfig(o), RunOptions{true, 0}}), std::invalid_argument)
       << "a pipelined run has a feedback delay of one frame";
+  config = sim::rigConfig(o);  // imu: 0 runs the modes without a motion prior, and no offset
+  config.use_imu = config.estimator.use_imu = false;
+  config.mode = Mode::kIdy;
+  EXPECT_THROW(System{config}, InputError) << "idy needs the IMU's motion prior";
+  config.mode = Mode::kBaseline;
+  config.estimator.estimate_td = true;
+  EXPECT_THROW(System{config}, InputError) << "no offset to estimate without an IMU";
+  config.estimator.estimate_td = false;
+  EXPECT_NO_THROW(System{config});
+}
+
+TEST(PipelineSystem, StereoAloneWithoutTheImuRunsAStreetInOnePiece) {
+  // imu: 0 (VINS-Fusion's stereo-only configs): every frame without an IMU factor, the first
+  // frame the world; the IMU samples the data has are not used.
+  const SceneRun run = runScene(Mode::kBaseline, 6.0, RunOptions::twoThreads(), {}, false, {},
+                                [](Config& c) { c.use_imu = c.estimator.use_imu = false; });
+  EXPECT_EQ(run.result.summary.resets.size(), 0u);
+  EXPECT_EQ(run.result.trajectory.size(), run.result.summary.frames) << "a pose from the first frame on";
+  const FaultCheck c = checkFault(run);
+  EXPECT_LT(c.ate_whole, 0.05);
+  EXPECT_LT(c.worst_excess_m, 0.05);
 }
 
 TEST(Outputs, FilesAreWrittenUnderATemporaryNameAndRenamedWhenComplete) {

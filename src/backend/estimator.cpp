@@ -6,6 +6,7 @@
 
 #include "backend/estimator.h"
 
+#include <algorithm>
 #include <chrono>
 #include <utility>
 
@@ -65,6 +66,7 @@ std::string Estimator::bridgeProblem(TimeNs t1, bool& imu_only) const {
     return text;
   }
   imu_only = true;
+  if (!options_.use_imu) return "";  // stereo alone: only the frame gap matters
   if (w_.imu.empty() || w_.imu.front().t_ns > t0 || w_.imu.back().t_ns < t1) return "no IMU data between frames";
   // The samples the integration uses: the last one at or before t0 to the first at or after t1.
   auto it = std::upper_bound(w_.imu.begin(), w_.imu.end(), t0, [](TimeNs t, const ImuSample& s) { return t < s.t_ns; });
@@ -104,6 +106,17 @@ bool Estimator::pushFrame(const frontend::FeatureFrame& ff, bool without_imu) {
   return w_.fm.addFrame(n, ff, options_.keyframe_parallax_px, rig_.focal_px, map_.dynamic_ids);
 }
 
+void Estimator::startFromPnp() {
+  // imu: 0: the new frame starts from PnP against the window's landmarks, unless PnP lands far
+  // from the constant-velocity prediction (a few bad landmarks, a moving object): then from it.
+  const int n = w_.count;
+  const imu::NavState predicted = w_.frames[n].nav();
+  if (!pnp(n)) return;
+  const double dt = 1e-9 * static_cast<double>(w_.frames[n].t_ns - w_.frames[n - 1].t_ns);
+  const double allowed = std::max(0.5, 3.0 * predicted.v_w.norm() * dt);
+  if ((w_.frames[n].nav().p_w_b - predicted.p_w_b).norm() > allowed) w_.frames[n].setNav(predicted);
+}
+
 FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
   FrameResult r;
   r.t_ns = ff.t_ns;
@@ -114,7 +127,7 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
   }
   // A gap the integration cannot bridge ends the segment: this frame starts a new window; an IMU
   // gap on an initialized stereo rig is carried by the stereo factors (bridge_imu_gaps).
-  bool imu_only = false, without_imu = false;
+  bool imu_only = false, without_imu = !options_.use_imu && w_.count >= 0;
   if (const std::string why = w_.count >= 0 ? bridgeProblem(ff.t_ns, imu_only) : std::string(); !why.empty()) {
     if (imu_only && w_.initialized && rig_.stereo && options_.bridge_imu_gaps) {
       without_imu = true;
@@ -129,6 +142,7 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     }
   }
   r.keyframe = pushFrame(ff, without_imu);
+  if (without_imu && !options_.use_imu && w_.initialized) startFromPnp();
 
   if (!w_.initialized) {
     if (!initStep(r)) return r;
@@ -148,7 +162,8 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     return r;
   }
   r.initialized = true;
-  if (r.status.empty()) r.status = r.stereo_only.empty() ? "tracking" : "tracking on stereo alone: " + r.stereo_only;
+  if (r.status.empty())
+    r.status = r.stereo_only.empty() || !options_.use_imu ? "tracking" : "tracking on stereo alone: " + r.stereo_only;
   r.state = w_.frames[w_.count].nav();
   r.td_s = w_.td_s;
   seg_.last_good = r.state;

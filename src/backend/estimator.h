@@ -66,6 +66,12 @@ class Estimator {
   void resetAfterFailure();
   std::unique_ptr<imu::Preintegration> integrate(TimeNs t0, TimeNs t1, const imu::NavState& from) const;
   bool initStep(FrameResult& result);
+  /// imu: 0: the newest frame's start from PnP, kept when near the constant-velocity prediction.
+  void startFromPnp();
+  /// initStep without the IMU (EstimatorOptions::use_imu false).
+  bool initStepStereo(FrameResult& result);
+  /// Stereo landmarks the first frame needs to start without the IMU.
+  static constexpr int kStereoInitLandmarks = 20;
   bool pnp(int frame);
   bool alignAndStart();
   /// estimate_td: the offset from the initialization window's rotations (alignRotationTimes);

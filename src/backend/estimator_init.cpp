@@ -16,7 +16,29 @@ using Eigen::Quaterniond;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
+bool Estimator::initStepStereo(FrameResult& r) {
+  // imu: 0: the first frame is the world (its body frame, or the last good pose after a failure),
+  // started as soon as its stereo landmarks are enough for the next frame's PnP.
+  if (seg_.reanchor_pending && seg_.last_good) {
+    imu::NavState s = *seg_.last_good;
+    s.v_w.setZero();
+    w_.frames[w_.count].setNav(s);
+    seg_.reanchor_pending = false;
+    r.reanchored = "held";
+  }
+  w_.fm.triangulate(w_.poses(), rig_);
+  if (w_.fm.trackedIn(w_.count) < kStereoInitLandmarks) {
+    r.status = "initializing: too few stereo landmarks, waiting";
+    resetWindow();
+    return false;
+  }
+  w_.initialized = true;
+  r.status = "initialized (stereo, no IMU)";
+  return true;
+}
+
 bool Estimator::initStep(FrameResult& r) {
+  if (!options_.use_imu) return initStepStereo(r);
   const int n = w_.count;
   if (n > 0) {
     if (!pnp(n)) {

@@ -77,6 +77,9 @@ struct EstimatorOptions {
   /// and biases carried, held constant while no IMU factor touches them); the IMU factors resume
   /// from the state the vision kept. false: the segment ends (a reset), as before.
   bool bridge_imu_gaps = true;
+  /// The config's `imu` (not a key of its own): false runs stereo alone, every frame without an IMU
+  /// factor, the first frame's pose held (the gauge), the world the first body frame (no gravity).
+  bool use_imu = true;
   /// After a failure the new segment's first window has no marginalization prior: its
   /// biases are tied to the last good state's with these standard deviations until the first
   /// prior forms (0: free, as VINS-Fusion). Without it a window full of traffic can push the

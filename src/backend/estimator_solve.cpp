@@ -66,7 +66,7 @@ void Estimator::optimize(FrameResult& r) {
   ceres::Solve(o, &problem, &summary);
   const auto post_start = std::chrono::steady_clock::now();
   if (estimatesRays()) storeRays();
-  if (options_.fix_gauge) restoreGauge(T_w_b0_before);
+  if (options_.fix_gauge && options_.use_imu) restoreGauge(T_w_b0_before);  // imu: 0 holds frame 0 itself
   velocitiesFromPositions();
   for (int i = 1; i <= w_.count; ++i) {
     const imu::NavState s = w_.frames[i - 1].nav();
@@ -99,7 +99,8 @@ void Estimator::holdSpeedBiasesAcrossGaps(ceres::Problem& problem,
     if (imu_in(i) || in_prior[i]) continue;  // an IMU factor into the frame, or the prior, holds its biases
     double* sb = const_cast<double*>(w_.frames[i].sb.data());  // the problem holds blocks as mutable
     if (!(i < w_.count && imu_in(i + 1))) {  // no IMU factor at all: speed and biases carried as they are
-      if (problem.HasParameterBlock(sb) && !(i == 0 && seg_.bias_anchor)) problem.SetParameterBlockConstant(sb);
+      if (problem.HasParameterBlock(sb) && !(i == 0 && seg_.bias_anchor && options_.use_imu))
+        problem.SetParameterBlockConstant(sb);
       continue;
     }
     if (i == 0 && !w_.prior) continue;  // the window's first frame: free, or tied by the bias anchor (as before)
@@ -140,6 +141,7 @@ int Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_p
     problem.AddParameterBlock(w_.frames[i].pose.data(), 7, const_cast<PoseManifold*>(&kPoseManifold));
     problem.AddParameterBlock(w_.frames[i].sb.data(), 9);
   }
+  if (!options_.use_imu) problem.SetParameterBlockConstant(w_.frames[0].pose.data());  // the gauge, as VINS-Fusion
   // Every block is evaluated once before it enters the problem: one that is not finite at
   // the start values (a degenerate integration, a prior gone bad) is left out and counted.
   if (w_.prior) {
@@ -165,7 +167,7 @@ int Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_p
 
 void Estimator::addBiasAnchor(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
   if (w_.prior) seg_.bias_anchor.reset();  // the window has its own prior now
-  if (!seg_.bias_anchor) return;
+  if (!seg_.bias_anchor || !options_.use_imu) return;
   costs.push_back(std::make_shared<BiasPriorFactor>(seg_.bias_anchor->head<3>(), seg_.bias_anchor->tail<3>(),
                                                     options_.reset_bias_prior_acc, options_.reset_bias_prior_gyr));
   problem.AddResidualBlock(costs.back().get(), nullptr, w_.frames[0].sb.data());

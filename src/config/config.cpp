@@ -525,6 +525,7 @@ Config readConfig(const std::string& path, std::vector<std::string>* keys_read) 
   Config c;
   c.path = path;
   c.use_imu = getInt(f, f.root, "imu", "1 to use the IMU, 0 for vision only") != 0;
+  c.estimator.use_imu = c.use_imu;
   c.num_cam = getInt(f, f.root, "num_of_cam", "1 or 2");
   if (c.num_cam != 1 && c.num_cam != 2)
     throw InputError(path, lineOf(f.root["num_of_cam"]),

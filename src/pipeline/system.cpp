@@ -18,8 +18,13 @@
 namespace idyvins::pipeline {
 
 void checkRunnable(const Config& config) {
-  if (!config.use_imu || config.num_cam != 2 || config.T_b_c.size() < 2)
-    throw InputError(config.path, "idyvins runs stereo + IMU configs only (imu: 1, num_of_cam: 2)");
+  if (config.num_cam != 2 || config.T_b_c.size() < 2)
+    throw InputError(config.path, "idyvins runs stereo configs only (num_of_cam: 2; imu: 1 or 0)");
+  if (!config.use_imu && usesIdyFilter(config.mode))
+    throw InputError(config.path, std::string("imu: 0 runs modes baseline, ransac and seg: ") + toString(config.mode) +
+                                      " needs the IMU's motion prior");
+  if (!config.use_imu && config.estimator.estimate_td)
+    throw InputError(config.path, "imu: 0 with estimate_td: 1: without an IMU there is no offset to estimate");
 }
 
 namespace {
@@ -149,6 +154,7 @@ void System::loadMap(const map::SavedMap& m, bool extend, const std::string& sou
 }
 
 void System::addImu(const ImuSample& sample) {
+  if (!config_.use_imu) return;                            // imu: 0: the samples a dataset has are not used
   if (last_imu_t_ns_ && sample.t_ns <= *last_imu_t_ns_) {  // as the estimator: strictly increasing
     ++summary_.imu_out_of_order;
     return;
@@ -209,7 +215,8 @@ TimeNs System::imuTime(const StereoFrame& frame) const {
 bool System::imuCovers(const StereoFrame& frame) const {
   // The estimator integrates to the frame's time: a sample at or after it must be here
   // (a frame between two samples, or whose own-time sample was dropped, waits for the next).
-  return !imu_.empty() && imu_.back().t_ns >= imuTime(frame);
+  // Without the IMU (imu: 0) no frame waits.
+  return !config_.use_imu || (!imu_.empty() && imu_.back().t_ns >= imuTime(frame));
 }
 
 void System::process(const StereoFrame& frame) {
