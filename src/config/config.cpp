@@ -363,6 +363,12 @@ void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
   if (!parseMode(mode_name, c.mode))
     throw InputError(f.path, lineOf(f.root["mode"]),
                      "key 'mode': expected one of " + modeNames() + ", got '" + mode_name + "'");
+  if (!c.use_imu && !f.root["mode"] &&
+      traitsOf(c.mode).filter == FilterKind::kIdy) {  // a VINS-Fusion stereo-only config as it is
+    c.mode = Mode::kBaseline;
+    c.warnings.push_back(f.path +
+                         ": imu: 0 and no mode key: mode baseline (the idy modes need the IMU's motion prior)");
+  }
   if (c.idy.lambda_dy_c > c.idy.lambda_dy)
     throw InputError(f.path, "lambda_dy_c (" + std::to_string(c.idy.lambda_dy_c) + ") must not exceed lambda_dy (" +
                                  std::to_string(c.idy.lambda_dy) + ")");
