@@ -29,27 +29,19 @@ std::uint8_t CdrReader::u8() {
   return data_[pos_++];
 }
 
-std::uint32_t CdrReader::u32() {
-  align(4);
-  need(4);
-  std::uint32_t v = 0;
-  for (int i = 0; i < 4; ++i) {
-    const std::uint32_t b = data_[pos_ + (big_endian_ ? 3 - i : i)];
-    v |= b << (8 * i);
-  }
-  pos_ += 4;
+std::uint64_t CdrReader::word(std::size_t n) {
+  align(n);
+  need(n);
+  std::uint64_t v = 0;
+  for (std::size_t i = 0; i < n; ++i) v |= std::uint64_t{data_[pos_ + (big_endian_ ? n - 1 - i : i)]} << (8 * i);
+  pos_ += n;
   return v;
 }
 
+std::uint32_t CdrReader::u32() { return static_cast<std::uint32_t>(word(4)); }
+
 double CdrReader::f64() {
-  align(8);
-  need(8);
-  std::uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) {
-    const std::uint64_t b = data_[pos_ + (big_endian_ ? 7 - i : i)];
-    v |= b << (8 * i);
-  }
-  pos_ += 8;
+  const std::uint64_t v = word(8);
   double d;
   std::memcpy(&d, &v, sizeof d);
   return d;

@@ -39,6 +39,8 @@ class CdrReader {
  private:
   void align(std::size_t n);
   void need(std::size_t n) const;
+  /// An unsigned integer of `n` bytes (4 or 8), aligned and in the message's byte order.
+  std::uint64_t word(std::size_t n);
   const std::uint8_t* data_;
   std::size_t size_, pos_ = 4;
   bool big_endian_ = false;
