@@ -217,6 +217,46 @@ TEST(ProjectionFactorsTd, MovesEachObservationAlongItsVelocityByTheOffsetChange)
   EXPECT_GT(r_fixed.norm(), 0.0);
 }
 
+std::vector<double> extrinsicBlock(const Extrinsic& e) { return poseBlock(e.t_b_c, e.q_b_c); }
+
+TEST(ProjectionFactorsEx, JacobiansMatchNumericIncludingTheMountAndTheOffset) {
+  std::uniform_real_distribution<double> v(-1, 1);
+  for (int t = 0; t < 50; ++t) {
+    ProjectionSetup s = randomProjection();
+    const ProjectionWeight w{460.0, 1.5, nullptr};
+    const Extrinsic rel = relative(s.ex0, s.ex1);
+    auto ex = extrinsicBlock(s.ex0);
+    ProjectionTwoFrameEx left(s.xy_i, s.xy_j, Extrinsic{}, w);
+    ProjectionTwoFrameEx right(s.xy_i, s.xy_j_right, rel, w);
+    test::checkCostFunction(left, {s.pose_i.data(), s.pose_j.data(), ex.data(), &s.inv_depth}, 1e-6, "2f1c ex");
+    test::checkCostFunction(right, {s.pose_i.data(), s.pose_j.data(), ex.data(), &s.inv_depth}, 1e-6, "2f2c ex");
+    const TimedObservation i{s.xy_i, Vector2d(v(rng), v(rng)), uni(-0.03, 0.03)};
+    const TimedObservation jr{s.xy_j_right, Vector2d(v(rng), v(rng)), uni(-0.03, 0.03)};
+    double td = uni(-0.03, 0.03);
+    ProjectionTwoFrameExTd timed(i, jr, rel, w);
+    test::checkCostFunction(timed, {s.pose_i.data(), s.pose_j.data(), ex.data(), &s.inv_depth, &td}, 1e-6,
+                            "2f2c ex td");
+  }
+}
+
+TEST(ProjectionFactorsEx, GiveTheFixedMountFactorsResidualsAtTheBlocksValue) {
+  ProjectionSetup s = randomProjection();
+  const ProjectionWeight w{460.0, 1.5, nullptr};
+  auto ex = extrinsicBlock(s.ex0);
+  const double* with_ex[] = {s.pose_i.data(), s.pose_j.data(), ex.data(), &s.inv_depth};
+  const double* fixed[] = {s.pose_i.data(), s.pose_j.data(), &s.inv_depth};
+  Vector2d a, b;
+  ASSERT_TRUE(
+      ProjectionTwoFrameEx(s.xy_i, s.xy_j_right, relative(s.ex0, s.ex1), w).Evaluate(with_ex, a.data(), nullptr));
+  ASSERT_TRUE(ProjectionTwoFrame(s.xy_i, s.xy_j_right, s.ex0, s.ex1, w).Evaluate(fixed, b.data(), nullptr));
+  EXPECT_LT((a - b).norm(), 1e-9);
+  EXPECT_GT(b.norm(), 0.0);
+  // compose undoes relative: the right camera's mount from the left one's and the pair.
+  const Extrinsic back = compose(s.ex0, relative(s.ex0, s.ex1));
+  EXPECT_LT((back.t_b_c - s.ex1.t_b_c).norm(), 1e-12);
+  EXPECT_LT(back.q_b_c.angularDistance(s.ex1.q_b_c), 1e-12);
+}
+
 TEST(ProjectionFactors, ResidualIsTheNormalizedReprojectionErrorInPixels) {
   ProjectionSetup s = randomProjection();
   ProjectionTwoFrame f(s.xy_i, s.xy_j, s.ex0, s.ex0, {460.0, 1.5, nullptr});

@@ -95,6 +95,14 @@ void printRunSummary(const nlohmann::json& s, const std::string& out) {
     std::printf("not initialized: %s\n", s["last_status"].get<std::string>().c_str());
   if (s["td_estimated"].get<bool>())
     std::printf("camera-IMU time offset td estimated: %.3f ms at the end\n", 1e3 * s["td_s"].get<double>());
+  if (const auto& e = s["extrinsic"]; !e.is_null()) {
+    std::printf("camera-IMU extrinsics (estimate_extrinsic %d): cam0 %s %.2f deg and %.1f cm from the config",
+                e["estimate_extrinsic"].get<int>(), e["refined"].get<bool>() ? "refined," : "not refined (no motion),",
+                e["rotation_change_deg"].get<double>(), 100 * e["translation_change_m"].get<double>());
+    if (e["sigma_rot_deg"].get<double>() >= 0)
+      std::printf(" (sigma %.3f deg, %.2f cm)", e["sigma_rot_deg"].get<double>(), 100 * e["sigma_t_m"].get<double>());
+    std::printf("; %s/config_refined.yaml has them\n", out.c_str());
+  }
   printInputWarnings(s);
   std::printf("mean tracking %.2f ms, filter %.3f ms, optimization %.2f ms, marginalization %.2f ms per frame\n",
               s["mean_tracking_ms"].get<double>(), s["mean_filter_ms"].get<double>(),

@@ -39,6 +39,10 @@ Estimator::Estimator(const camera::Rig& cameras, const ImuNoise& noise, const Es
   rig_.fy = fisheye ? rig_.focal_px : cameras.cams[0].fy;
   noise_ = noise;
   w_.td_s = options.td_s;
+  ex_.start = rig_.T_b_c0;
+  if (rig_.stereo) ex_.T_c0_c1 = relative(rig_.T_b_c0, rig_.T_b_c1);
+  ex_.rotation_known = options.estimate_extrinsic != 2;
+  setPose(rig_.T_b_c0.t_b_c, rig_.T_b_c0.q_b_c, ex_.block.data());
 }
 
 void Estimator::addImu(const ImuSample& s) {
@@ -166,6 +170,7 @@ FrameResult Estimator::addFrame(const frontend::FeatureFrame& ff) {
     r.status = r.stereo_only.empty() || !options_.use_imu ? "tracking" : "tracking on stereo alone: " + r.stereo_only;
   r.state = w_.frames[w_.count].nav();
   r.td_s = w_.td_s;
+  if (options_.estimate_extrinsic != 0) r.extrinsic = extrinsicEstimate();
   seg_.last_good = r.state;
   seg_.last_good_t_ns = ff.t_ns;
   seg_.last_good_settled = ++seg_.frames >= kSettledFrames;

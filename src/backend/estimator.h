@@ -12,6 +12,7 @@
 
 #include "backend/estimator_options.h"
 #include "backend/frame_result.h"
+#include "backend/landmark_factors.h"
 #include "backend/window_state.h"
 #include "camera/rig.h"
 #include "core/measurements.h"
@@ -48,6 +49,7 @@ class Estimator {
   LatestState latest() const;
   /// Current camera–IMU time offset (s): the config's td, or its estimate with estimate_td.
   double timeOffset() const { return w_.td_s; }
+  /// The rig's extrinsics: the config's, or their current estimate with estimate_extrinsic.
   const Rig& rig() const { return rig_; }
   /// Static landmarks that left the window (DESIGN §4.7; confirmed-dynamic ones come out in
   /// FrameResult::confirmed_points).
@@ -98,11 +100,25 @@ class Estimator {
   int addProjections(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
                      ceres::LossFunction& huber, std::deque<CandidateWeight>& weights, int& candidates);
   /// The blocks of a landmark's projection factor for `frame` (-1: its stereo factor in the
-  /// anchor frame), the td block last when `with_td`.
+  /// anchor frame), T_b_c0 after the poses when estimatesExtrinsic(), the td block last when `with_td`.
   std::vector<double*> factorBlocks(Landmark& lm, int frame, bool with_td);
   bool estimatesTd() const { return options_.estimate_td; }
+  /// The two-frame factors carry the T_b_c0 block (estimate_extrinsic, once opened).
+  bool estimatesExtrinsic() const { return options_.estimate_extrinsic != 0 && ex_.open; }
+  ExtrinsicUse extrinsicUse() const { return {estimatesExtrinsic(), ex_.T_c0_c1}; }
+  /// estimate_extrinsic: the T_b_c0 block and its prior into the solve, opened once the window is
+  /// initialized and moving (kMinSpeedForTd), held constant while it is slow.
+  void addExtrinsic(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
+  /// After a solve: the rig's extrinsics from the block (the stereo pair rigid).
+  void storeExtrinsic();
+  ExtrinsicEstimate extrinsicEstimate() const;
+  /// estimate_extrinsic 2 before the rotation is known: the newest frame pair's gyroscope and
+  /// track rotations into the hand–eye calibration; true once the rotation is set.
+  bool calibrateRotation(FrameResult& r);
   /// Landmarks estimate their anchor rays (estimate_anchor_ray; the config refuses it with estimate_td).
   bool estimatesRays() const { return options_.estimate_anchor_ray && !options_.estimate_td; }
+  /// After a solve: the estimated rays and extrinsics from their solver blocks.
+  void storeSolved();
   /// After a solve with estimated rays: the solver blocks back into the landmarks.
   void storeRays();
   /// Recomputes every candidate weight from the current poses.
@@ -147,6 +163,7 @@ class Estimator {
   ImuNoise noise_;
   WindowState w_;
   SegmentState seg_;
+  ExtrinsicState ex_;
   MapState map_;
   std::optional<LeavingKeyframe> leaving_;  ///< set by marginalizeOldest, moved into the frame's result
 };

@@ -39,6 +39,7 @@ bool Estimator::initStepStereo(FrameResult& r) {
 
 bool Estimator::initStep(FrameResult& r) {
   if (!options_.use_imu) return initStepStereo(r);
+  if (!ex_.rotation_known && !calibrateRotation(r)) return false;
   const int n = w_.count;
   if (n > 0) {
     if (!pnp(n)) {
@@ -172,4 +173,36 @@ bool Estimator::alignAndStart() {
   w_.initialized = true;
   return true;
 }
+
+bool Estimator::calibrateRotation(FrameResult& r) {
+  const int n = w_.count;
+  if (n > 0 && w_.frames[n].pre) {
+    std::vector<Vector2d> xy_a, xy_b;
+    for (const auto& [id, lm] : w_.fm.landmarks()) {
+      if (lm.start_frame > n - 1 || lm.endFrame() < n) continue;
+      xy_a.push_back(lm.obs[static_cast<std::size_t>(n - 1 - lm.start_frame)].xy);
+      xy_b.push_back(lm.obs[static_cast<std::size_t>(n - lm.start_frame)].xy);
+    }
+    if (const auto q_cam = relativeCameraRotation(xy_a, xy_b, rig_.focal_px))
+      ex_.pairs.push_back({w_.frames[n].pre->deltaQ(), *q_cam});
+  }
+  const auto q_b_c = static_cast<int>(ex_.pairs.size()) >= kWindowSize ? handEyeRotation(ex_.pairs) : std::nullopt;
+  if (!q_b_c) {
+    r.status = "initializing: calibrating the camera-IMU rotation (" + std::to_string(ex_.pairs.size()) +
+               " frame pairs; rotate the rig)";
+    if (n >= kWindowSize) slide(true);
+    return false;
+  }
+  // The hand–eye rotation replaces the config's; the window starts again with it.
+  rig_.T_b_c0.q_b_c = *q_b_c;
+  if (rig_.stereo) rig_.T_b_c1 = compose(rig_.T_b_c0, ex_.T_c0_c1);
+  ex_.start = rig_.T_b_c0;
+  setPose(rig_.T_b_c0.t_b_c, rig_.T_b_c0.q_b_c, ex_.block.data());
+  ex_.rotation_known = true;
+  ex_.pairs.clear();
+  r.status = "initializing: camera-IMU rotation calibrated from the tracks, restarting";
+  resetWindow();
+  return false;
+}
+
 }  // namespace idyvins::backend

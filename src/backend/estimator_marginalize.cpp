@@ -82,13 +82,15 @@ void Estimator::marginalizeOldest() {
       // The prior keeps no information on the time offset: the marginalized observations are
       // moved to the current estimate (a prior that kept it would hold td near its first values).
       const TdUse td = estimatesTd() ? TdUse{false, w_.td_s} : TdUse{};
-      for (const auto& lf : landmarkFactors(lm, rig_, w, td, share_of_frame, estimatesRays()))
+      const int depth_at = estimatesExtrinsic() ? 3 : 2;  // after the poses (and T_b_c0)
+      for (const auto& lf : landmarkFactors(lm, rig_, w, td, share_of_frame, estimatesRays(), extrinsicUse()))
         m.add({lf.cost, huber, factorBlocks(lm, lf.frame, false),
-               lf.frame < 0 ? std::vector<int>{0} : std::vector<int>{0, 2}});
+               lf.frame < 0 ? std::vector<int>{0} : std::vector<int>{0, depth_at}});
     }
     w_.prior = std::make_shared<MarginalizationPrior>(m.marginalize());
     if (options_.prior_fading < 1.0) w_.prior->scaleInformation(options_.prior_fading);
     if (w_.prior->blocks.empty()) w_.prior.reset();
+    if (w_.prior && estimatesExtrinsic()) ex_.sigma = marginalSigma(*w_.prior, ex_.block.data());
   }
   if (w_.initialized) leaving_ = leavingKeyframe();
   for (const auto& [id, lm] : w_.fm.landmarks())

@@ -25,6 +25,14 @@ struct EstimatorOptions {
   bool estimate_td = false;  ///< estimate td online in the window (DESIGN §4.11)
   double td_s = 0.0;         ///< the offset, or its initial value with estimate_td, seconds
 
+  // Camera–IMU extrinsics (VINS-Fusion's estimate_extrinsic): 0 keeps body_T_cam0/1 as written;
+  // 1 refines the left camera's mount in the window, the stereo pair rigid, from the config's
+  // values (a prior of extrinsic_prior_deg/_m on them); 2 starts the rotation from the hand–eye
+  // calibration of the tracks against the gyroscope, then as 1 (backend/extrinsic.h).
+  int estimate_extrinsic = 0;
+  double extrinsic_prior_deg = 5.0;  ///< deg, σ of the prior on the mount's rotation (its start value)
+  double extrinsic_prior_m = 0.05;   ///< m, σ of the prior on the mount's translation
+
   // Measurement model and window management.
   /// Pixel noise of projection factors (the one default of it; ProjectionWeight takes it from
   /// here). Tighter than VINS-Fusion's 1.5 px: the tracks are more accurate than that, and with
@@ -99,6 +107,24 @@ struct EstimatorOptions {
   /// tests of the free gauge only.
   bool fix_gauge = true;
 
+  /// The camera–IMU calibration's keys: the time offset and the extrinsics.
+  void declareCalibrationParams(ParamVisitor& v) {
+    v.section("Camera-IMU time offset: image stamp + td = IMU time (s)");
+    v.param({"estimate_td", "0/1, estimate td online"}, estimate_td);
+    v.param({"td", "s, the offset (initial value with estimate_td)", ParamRule::kTimeOffset}, td_s);
+    v.section("Camera-IMU extrinsics (VINS-Fusion's estimate_extrinsic)");
+    v.param({"estimate_extrinsic",
+             "0: as written, 1: refined online from them, 2: rotation from the tracks (hand-eye), then refined",
+             ParamRule::kExtrinsicMode},
+            estimate_extrinsic);
+    v.param({"extrinsic_prior_deg", "deg, sigma of the prior on the refined rotation (its start value)",
+             ParamRule::kPositive},
+            extrinsic_prior_deg);
+    v.param(
+        {"extrinsic_prior_m", "m, sigma of the prior on the refined translation (the config's)", ParamRule::kPositive},
+        extrinsic_prior_m);
+  }
+
   /// Declares every config key of the struct (load, print and save visit this list).
   void declareParams(ParamVisitor& v) {
     v.section("Sliding-window optimization (VINS-Fusion's keys)");
@@ -110,9 +136,7 @@ struct EstimatorOptions {
     v.param({"solver_time_limit", "0/1, cap solves at max_solver_time (results depend on load)"}, time_limited);
     v.param({"solver_function_tolerance", "relative cost decrease of convergence", ParamRule::kPositive},
             function_tolerance);
-    v.section("Camera-IMU time offset: image stamp + td = IMU time (s)");
-    v.param({"estimate_td", "0/1, estimate td online"}, estimate_td);
-    v.param({"td", "s, the offset (initial value with estimate_td)", ParamRule::kTimeOffset}, td_s);
+    declareCalibrationParams(v);
     v.section("Sliding-window measurement model");
     v.param({"projection_sigma_px", "px, pixel noise of projection factors", ParamRule::kPositive}, sigma_px);
     v.param({"projection_huber", "Huber threshold on the whitened residual", ParamRule::kPositive}, huber_px);

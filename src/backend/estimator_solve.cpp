@@ -32,12 +32,12 @@ void Estimator::optimize(FrameResult& r) {
   std::vector<std::shared_ptr<ceres::CostFunction>> costs;  // owned here, borrowed by the problem
   ceres::HuberLoss huber(options_.huber_px);
   r.skipped_blocks = addStateAndImu(problem, costs);
-  // Candidate weights 1/m_j (DESIGN §4.5): one value per (landmark, frame), owned here,
-  // pointed to by the factors and refreshed by the iteration callback below.
+  // Candidate weights 1/m_j (DESIGN §4.5), owned here, refreshed by the iteration callback below.
   std::deque<CandidateWeight> weights;
+  addExtrinsic(problem, costs);
   r.landmarks = addProjections(problem, costs, huber, weights, r.candidates);
   holdSpeedBiasesAcrossGaps(problem, costs);
-  // The offset is observable only in motion: held while the oldest frame is slow (as VINS-Fusion).
+  // The offset, observable only in motion, is held while the oldest frame is slow (as VINS-Fusion).
   if (estimatesTd() && problem.HasParameterBlock(&w_.td_s) && w_.frames[0].nav().v_w.norm() < kMinSpeedForTd)
     problem.SetParameterBlockConstant(&w_.td_s);
   refreshWeights(weights);
@@ -65,7 +65,7 @@ void Estimator::optimize(FrameResult& r) {
   ceres::Solver::Summary summary;
   ceres::Solve(o, &problem, &summary);
   const auto post_start = std::chrono::steady_clock::now();
-  if (estimatesRays()) storeRays();
+  storeSolved();
   if (options_.fix_gauge && options_.use_imu) restoreGauge(T_w_b0_before);  // imu: 0 holds frame 0 itself
   velocitiesFromPositions();
   for (int i = 1; i <= w_.count; ++i) {
@@ -85,6 +85,40 @@ void Estimator::optimize(FrameResult& r) {
   p.minimizer_ms = 1e3 * summary.minimizer_time_in_seconds;
   p.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
   p.converged = summary.termination_type == ceres::CONVERGENCE;
+}
+
+void Estimator::addExtrinsic(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
+  if (options_.estimate_extrinsic == 0 || !options_.use_imu) return;
+  const bool moving = w_.frames[0].nav().v_w.norm() >= kMinSpeedForTd;
+  if (!ex_.open) {
+    if (!w_.initialized || !moving || w_.count < kWindowSize) return;  // not observable yet: as written
+    ex_.open = true;
+    setPose(rig_.T_b_c0.t_b_c, rig_.T_b_c0.q_b_c, ex_.block.data());
+  }
+  problem.AddParameterBlock(ex_.block.data(), kPoseSize, const_cast<PoseManifold*>(&kPoseManifold));
+  costs.push_back(std::make_shared<PosePriorFactor>(ex_.start, options_.extrinsic_prior_m,
+                                                    options_.extrinsic_prior_deg * M_PI / 180.0));
+  problem.AddResidualBlock(costs.back().get(), nullptr, ex_.block.data());
+  if (!moving) problem.SetParameterBlockConstant(ex_.block.data());  // as the offset: observable in motion only
+}
+
+void Estimator::storeExtrinsic() {
+  rig_.T_b_c0.t_b_c = Eigen::Map<const Vector3d>(ex_.block.data());
+  rig_.T_b_c0.q_b_c = Eigen::Map<const Quaterniond>(ex_.block.data() + 3).normalized();
+  if (rig_.stereo) rig_.T_b_c1 = compose(rig_.T_b_c0, ex_.T_c0_c1);
+}
+
+ExtrinsicEstimate Estimator::extrinsicEstimate() const {
+  ExtrinsicEstimate e;
+  e.t_b_c0 = rig_.T_b_c0.t_b_c;
+  e.q_b_c0 = rig_.T_b_c0.q_b_c;
+  e.open = ex_.open;
+  e.rotation_known = ex_.rotation_known;
+  if (ex_.sigma) {
+    e.sigma_t_m = ex_.sigma->t_m;
+    e.sigma_rot_deg = ex_.sigma->rot_rad * 180.0 / M_PI;
+  }
+  return e;
 }
 
 void Estimator::holdSpeedBiasesAcrossGaps(ceres::Problem& problem,
@@ -176,6 +210,7 @@ void Estimator::addBiasAnchor(ceres::Problem& problem, std::vector<std::shared_p
 std::vector<double*> Estimator::factorBlocks(Landmark& lm, int frame, bool with_td) {
   std::vector<double*> blocks;
   if (frame >= 0) blocks = {w_.frames[lm.start_frame].pose.data(), w_.frames[frame].pose.data()};
+  if (frame >= 0 && estimatesExtrinsic()) blocks.push_back(ex_.block.data());
   if (estimatesRays()) {
     lm.ray_block = {lm.anchorRay().x(), lm.anchorRay().y(), lm.inv_depth};
     blocks.push_back(lm.ray_block.data());
@@ -202,13 +237,18 @@ int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_p
         scale_of_frame[weights.back().frame] = &weights.back().info;
       }
     }
-    for (const auto& lf :
-         landmarkFactors(lm, rig_, w, TdUse{estimatesTd(), std::nullopt}, scale_of_frame, estimatesRays())) {
+    for (const auto& lf : landmarkFactors(lm, rig_, w, TdUse{estimatesTd(), std::nullopt}, scale_of_frame,
+                                          estimatesRays(), extrinsicUse())) {
       costs.push_back(lf.cost);
       problem.AddResidualBlock(lf.cost.get(), &huber, factorBlocks(lm, lf.frame, estimatesTd()));
     }
   }
   return used;
+}
+
+void Estimator::storeSolved() {
+  if (estimatesRays()) storeRays();
+  if (estimatesExtrinsic()) storeExtrinsic();
 }
 
 void Estimator::storeRays() {

@@ -69,6 +69,16 @@ struct SolveProfile {
   }
 };
 
+/// The left camera's mount as estimate_extrinsic has it after a frame.
+struct ExtrinsicEstimate {
+  Eigen::Vector3d t_b_c0 = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q_b_c0 = Eigen::Quaterniond::Identity();
+  bool open = false;           ///< refined in the window's solves (the motion excited it)
+  bool rotation_known = true;  ///< estimate_extrinsic 2: the hand–eye rotation has converged
+  double sigma_t_m = -1;       ///< marginal σ from what left the window (-1: none yet)
+  double sigma_rot_deg = -1;
+};
+
 /// What the estimator says about one frame.
 struct FrameResult {
   TimeNs t_ns = 0;
@@ -106,6 +116,8 @@ struct FrameResult {
   /// first kSettledFrames frames and the biases started again as at the first start.
   bool biases_from_last_good = false;
   int skipped_blocks = 0;  ///< residual blocks left out of this solve: not finite at their start values
+  /// estimate_extrinsic: the left camera's mount after this frame (nullopt when not estimated).
+  std::optional<ExtrinsicEstimate> extrinsic;
   /// The keyframe that left the window at this frame (initialized windows only).
   std::optional<LeavingKeyframe> left_window;
 };

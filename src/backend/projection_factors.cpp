@@ -149,6 +149,25 @@ ProjectionTwoFrameTd::ProjectionTwoFrameTd(const TimedObservation& obs_i, const 
                                            const ProjectionWeight& weight)
     : i_(obs_i), j_(obs_j), ex0_(T_b_c0), exb_(T_b_cb), weight_(weight) {}
 
+namespace {
+
+/// d r / d td of a two-frame factor at the moved observations pts_i (anchor) and the
+/// observation velocities v_i, v_j: pts_i moves by −v_i (the anchor ray scaled by 1/ρ), pts_j by −v_j.
+Vector2d twoFrameTdJacobian(const Vector3d& pts_i, double const* const* poses, double inv_dep, const Extrinsic& ex0,
+                            const Extrinsic& exb, double sqrt_info, const TimedObservation& i,
+                            const TimedObservation& j) {
+  const Eigen::Map<const Vector3d> Pi(poses[0]);
+  const Quaterniond Qi = Eigen::Map<const Quaterniond>(poses[0] + 3).normalized();
+  const Eigen::Map<const Vector3d> Pj(poses[1]);
+  const Quaterniond Qj = Eigen::Map<const Quaterniond>(poses[1] + 3).normalized();
+  const Vector3d pts_cam_j = transferPoint(pts_i, inv_dep, Pi, Qi, Pj, Qj, ex0, exb);
+  const Matrix3d R_cj_ci = exb.q_b_c.conjugate().toRotationMatrix() * Qj.conjugate().toRotationMatrix() *
+                           Qi.toRotationMatrix() * ex0.q_b_c.toRotationMatrix();
+  return reduceJacobian(pts_cam_j, sqrt_info) * R_cj_ci * (-velocity3(i) / inv_dep) + sqrt_info * j.velocity;
+}
+
+}  // namespace
+
 bool ProjectionTwoFrameTd::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   const double td = parameters[3][0];
   const Vector3d pts_i = atOffset(i_, td), pts_j = atOffset(j_, td);
@@ -156,18 +175,88 @@ bool ProjectionTwoFrameTd::Evaluate(double const* const* parameters, double* res
   // observations (no factor object built per evaluation: this runs in the solver loop).
   if (!evaluateTwoFrame(pts_i, pts_j, ex0_, exb_, weight_, parameters, residuals, jacobians)) return false;
   if (!jacobians || !jacobians[3]) return true;
-  const Eigen::Map<const Vector3d> Pi(parameters[0]);
-  const Quaterniond Qi = Eigen::Map<const Quaterniond>(parameters[0] + 3).normalized();
-  const Eigen::Map<const Vector3d> Pj(parameters[1]);
-  const Quaterniond Qj = Eigen::Map<const Quaterniond>(parameters[1] + 3).normalized();
-  const double inv_dep = parameters[2][0];
-  const double sqrt_info = weight_.sqrtInfo();
-  const Vector3d pts_cam_j = transferPoint(pts_i, inv_dep, Pi, Qi, Pj, Qj, ex0_, exb_);
-  const Matrix3d R_cj_ci = exb_.q_b_c.conjugate().toRotationMatrix() * Qj.conjugate().toRotationMatrix() *
-                           Qi.toRotationMatrix() * ex0_.q_b_c.toRotationMatrix();
-  // d pts_i / d td = −v_i (the anchor ray scaled by 1/ρ); d pts_j / d td = −v_j.
   Eigen::Map<Vector2d> J(jacobians[3]);
-  J = reduceJacobian(pts_cam_j, sqrt_info) * R_cj_ci * (-velocity3(i_) / inv_dep) + sqrt_info * j_.velocity;
+  J = twoFrameTdJacobian(pts_i, parameters, parameters[2][0], ex0_, exb_, weight_.sqrtInfo(), i_, j_);
+  return true;
+}
+
+Extrinsic compose(const Extrinsic& T_b_c0, const Extrinsic& T_c0_cb) {
+  Extrinsic e;
+  e.q_b_c = (T_b_c0.q_b_c * T_c0_cb.q_b_c).normalized();
+  e.t_b_c = T_b_c0.q_b_c * T_c0_cb.t_b_c + T_b_c0.t_b_c;
+  return e;
+}
+
+Extrinsic relative(const Extrinsic& T_b_c0, const Extrinsic& T_b_c1) {
+  Extrinsic e;
+  e.q_b_c = (T_b_c0.q_b_c.conjugate() * T_b_c1.q_b_c).normalized();
+  e.t_b_c = T_b_c0.q_b_c.conjugate() * (T_b_c1.t_b_c - T_b_c0.t_b_c);
+  return e;
+}
+
+namespace {
+
+Extrinsic extrinsicBlock(const double* block) {
+  Extrinsic e;
+  e.t_b_c = Eigen::Map<const Vector3d>(block);
+  e.q_b_c = Eigen::Map<const Quaterniond>(block + 3).normalized();
+  return e;
+}
+
+/// A two-frame factor with the T_b_c0 block: blocks {pose_i, pose_j, T_b_c0, inv_depth}; the
+/// residual and the pose and depth Jacobians are evaluateTwoFrame's at the current mount, the
+/// mount's (tangent [δt, δθ], T_b_c0 ∘ (δt, Exp δθ) as a pose block) through both cameras.
+bool evaluateTwoFrameEx(const Vector3d& pts_i, const Vector3d& pts_j, const Extrinsic& rel,
+                        const ProjectionWeight& weight, double const* const* parameters, double* residuals,
+                        double** jacobians) {
+  const Extrinsic ex0 = extrinsicBlock(parameters[2]), exb = compose(ex0, rel);
+  const double* fixed[3] = {parameters[0], parameters[1], parameters[3]};
+  double* fixed_jac[3] = {nullptr, nullptr, nullptr};
+  if (jacobians) fixed_jac[0] = jacobians[0], fixed_jac[1] = jacobians[1], fixed_jac[2] = jacobians[3];
+  if (!evaluateTwoFrame(pts_i, pts_j, ex0, exb, weight, fixed, residuals, jacobians ? fixed_jac : nullptr))
+    return false;
+  if (!jacobians || !jacobians[2]) return true;
+  const Quaterniond Qi = Eigen::Map<const Quaterniond>(parameters[0] + 3).normalized();
+  const Eigen::Map<const Vector3d> Pi(parameters[0]), Pj(parameters[1]);
+  const Quaterniond Qj = Eigen::Map<const Quaterniond>(parameters[1] + 3).normalized();
+  const double inv_dep = parameters[3][0];
+  const Vector3d pts_cam_i = pts_i / inv_dep;
+  const Vector3d pts_imu_j = Qj.conjugate() * (Qi * (ex0.q_b_c * pts_cam_i + ex0.t_b_c) + Pi - Pj);
+  const Vector3d u = ex0.q_b_c.conjugate() * (pts_imu_j - ex0.t_b_c);  // the point in the left camera j
+  const Vector3d pts_cam_j = rel.q_b_c.conjugate() * (u - rel.t_b_c);
+  const Matrix3d R0 = ex0.q_b_c.toRotationMatrix(), Rr_T = rel.q_b_c.conjugate().toRotationMatrix();
+  const Matrix3d R_ji = Qj.conjugate().toRotationMatrix() * Qi.toRotationMatrix();
+  Eigen::Matrix<double, 3, 6> jaco;
+  jaco.leftCols<3>() = Rr_T * R0.transpose() * (R_ji - Matrix3d::Identity());
+  jaco.rightCols<3>() = Rr_T * (-R0.transpose() * R_ji * R0 * hat(pts_cam_i) + hat(u));
+  Eigen::Map<PoseJac> J(jacobians[2]);
+  J.leftCols<6>() = reduceJacobian(pts_cam_j, weight.sqrtInfo()) * jaco;
+  J.rightCols<1>().setZero();
+  return true;
+}
+
+}  // namespace
+
+ProjectionTwoFrameEx::ProjectionTwoFrameEx(const Vector2d& xy_i, const Vector2d& xy_j, const Extrinsic& T_c0_cb,
+                                           const ProjectionWeight& weight)
+    : pts_i_(homogeneous(xy_i)), pts_j_(homogeneous(xy_j)), rel_(T_c0_cb), weight_(weight) {}
+
+bool ProjectionTwoFrameEx::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  return evaluateTwoFrameEx(pts_i_, pts_j_, rel_, weight_, parameters, residuals, jacobians);
+}
+
+ProjectionTwoFrameExTd::ProjectionTwoFrameExTd(const TimedObservation& obs_i, const TimedObservation& obs_j,
+                                               const Extrinsic& T_c0_cb, const ProjectionWeight& weight)
+    : i_(obs_i), j_(obs_j), rel_(T_c0_cb), weight_(weight) {}
+
+bool ProjectionTwoFrameExTd::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  const double td = parameters[4][0];
+  const Vector3d pts_i = atOffset(i_, td), pts_j = atOffset(j_, td);
+  if (!evaluateTwoFrameEx(pts_i, pts_j, rel_, weight_, parameters, residuals, jacobians)) return false;
+  if (!jacobians || !jacobians[4]) return true;
+  const Extrinsic ex0 = extrinsicBlock(parameters[2]);
+  Eigen::Map<Vector2d> J(jacobians[4]);
+  J = twoFrameTdJacobian(pts_i, parameters, parameters[3][0], ex0, compose(ex0, rel_), weight_.sqrtInfo(), i_, j_);
   return true;
 }
 

@@ -91,6 +91,41 @@ class ProjectionOneFrameTwoCamTd final : public ceres::SizedCostFunction<2, 1, 1
   ProjectionWeight weight_;
 };
 
+/// A projection factor with the left camera's mount T_b_c0 as a block (estimate_extrinsic): the
+/// anchor left camera in frame i to camera b in frame j, camera b's pose in the left camera
+/// T_c0_cb fixed (identity for the left camera; the stereo pair is rigid). Blocks: pose_i (7),
+/// pose_j (7), T_b_c0 (7, a pose block: t, q xyzw), inv_depth (1).
+class ProjectionTwoFrameEx final : public ceres::SizedCostFunction<2, 7, 7, 7, 1> {
+ public:
+  ProjectionTwoFrameEx(const Eigen::Vector2d& xy_i, const Eigen::Vector2d& xy_j, const Extrinsic& T_c0_cb,
+                       const ProjectionWeight& weight);
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
+
+ private:
+  Eigen::Vector3d pts_i_, pts_j_;
+  Extrinsic rel_;
+  ProjectionWeight weight_;
+};
+
+/// ProjectionTwoFrameEx with the time offset. Blocks: pose_i (7), pose_j (7), T_b_c0 (7),
+/// inv_depth (1), td (1, seconds).
+class ProjectionTwoFrameExTd final : public ceres::SizedCostFunction<2, 7, 7, 7, 1, 1> {
+ public:
+  ProjectionTwoFrameExTd(const TimedObservation& obs_i, const TimedObservation& obs_j, const Extrinsic& T_c0_cb,
+                         const ProjectionWeight& weight);
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
+
+ private:
+  TimedObservation i_, j_;
+  Extrinsic rel_;
+  ProjectionWeight weight_;
+};
+
+/// T_b_c0 ∘ T_c0_cb: camera b's mount from the left camera's and the pair's relative pose.
+Extrinsic compose(const Extrinsic& T_b_c0, const Extrinsic& T_c0_cb);
+/// T_c0_c1 of a stereo rig.
+Extrinsic relative(const Extrinsic& T_b_c0, const Extrinsic& T_b_c1);
+
 /// Landmarks whose anchor ray is estimated (EstimatorOptions::estimate_anchor_ray): one block
 /// of 3, the ray's point (x, y) on the anchor left camera's normalized plane and the inverse
 /// depth along it, so no observation is taken as exact. The anchor observation's own

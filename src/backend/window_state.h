@@ -10,6 +10,7 @@
 #include <set>
 #include <vector>
 
+#include "backend/extrinsic.h"
 #include "backend/feature_manager.h"
 #include "backend/frame_result.h"
 #include "backend/marginalization.h"
@@ -56,6 +57,18 @@ struct SegmentState {
   /// first marginalization prior (EstimatorOptions::reset_bias_prior_acc, _gyr).
   std::optional<Eigen::Matrix<double, 6, 1>> bias_anchor;
   bool td_restarted = false;  ///< the initialization restarted once for the offset (since the last failure)
+};
+
+/// The left camera's mount while estimate_extrinsic refines it (backend/extrinsic.h); it outlives
+/// windows: a reset keeps the estimate.
+struct ExtrinsicState {
+  std::array<double, 7> block{};    ///< T_b_c0 as a pose block (t, q xyzw), the window's while `open`
+  Extrinsic start;                  ///< the prior's centre: the config's mount, or the hand–eye rotation's (2)
+  Extrinsic T_c0_c1;                ///< the stereo pair's relative pose, rigid
+  bool open = false;                ///< in the window's solves, once the motion first excited it
+  bool rotation_known = true;       ///< estimate_extrinsic 2: false until the hand–eye rotation converged
+  std::vector<RotationPair> pairs;  ///< estimate_extrinsic 2: gyroscope and track rotations so far
+  std::optional<PoseSigma> sigma;   ///< from the newest marginalization prior holding the block
 };
 
 /// The maps the window feeds (DESIGN §4.7).

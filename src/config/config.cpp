@@ -253,6 +253,8 @@ const char* ruleText(ParamRule rule) {
       return "a gravity magnitude in [9, 10.5]";
     case ParamRule::kTimeOffset:
       return "a camera-IMU offset within 0.5 s (td is in seconds)";
+    case ParamRule::kExtrinsicMode:
+      return "0, 1 or 2";
     case ParamRule::kAny:
       break;
   }
@@ -277,6 +279,8 @@ bool satisfies(double v, ParamRule rule) {
       return v >= 9 && v <= 10.5;
     case ParamRule::kTimeOffset:
       return std::abs(v) <= 0.5;
+    case ParamRule::kExtrinsicMode:
+      return v == 0 || v == 1 || v == 2;
     case ParamRule::kAny:
       break;
   }
@@ -389,6 +393,13 @@ void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
   if (c.estimator.estimate_anchor_ray && c.estimator.estimate_td)
     throw InputError(f.path, lineOf(f.root["estimate_anchor_ray"]),
                      "estimate_anchor_ray has no time-offset form: set estimate_td 0 with it");
+  if (c.estimator.estimate_extrinsic != 0 && c.estimator.estimate_anchor_ray)
+    throw InputError(f.path, lineOf(f.root["estimate_anchor_ray"]),
+                     "estimate_anchor_ray has no form with estimated extrinsics: set estimate_extrinsic 0 with it");
+  if (c.estimator.estimate_extrinsic != 0 && !c.use_imu)
+    throw InputError(f.path, lineOf(f.root["estimate_extrinsic"]),
+                     "estimate_extrinsic " + std::to_string(c.estimator.estimate_extrinsic) +
+                         " needs the IMU (imu: 0 has no body frame to mount the cameras on): set it 0");
   const fs::path folder = fs::path(f.path).parent_path();
   for (std::string* table : {&c.segmentation_rgb_ids, &c.segmentation_vehicle_ids})
     if (!table->empty() && fs::path(*table).is_relative()) *table = (folder / *table).string();
@@ -419,7 +430,6 @@ const std::vector<std::pair<std::string, std::string>> kVinsKeysNotUsed = {
     {"load_previous_pose_graph", "run --load-map"},
     {"pose_graph_save_path", "run --save-map"},
     {"save_image", "not used"},
-    {"estimate_extrinsic", "the extrinsics are kept fixed"},
     {"use_gpu", "not used"},
     {"use_gpu_acc_flow", "not used"},
     {"use_gpu_ceres", "not used"}};
@@ -466,13 +476,7 @@ void warnAboutKeys(const YamlFile& f, Config& c) {
     const auto vins =
         std::find_if(kVinsKeysNotUsed.begin(), kVinsKeysNotUsed.end(), [&](const auto& k) { return k.first == key; });
     if (vins != kVinsKeysNotUsed.end()) {
-      if (key == "estimate_extrinsic" && kv.second.IsScalar() && kv.second.Scalar() != "0")
-        c.warnings.push_back(f.path + ":" + std::to_string(lineOf(kv.first)) +
-                             ": estimate_extrinsic: " + kv.second.Scalar() +
-                             " is not honoured: idyvins keeps body_T_cam0/1 as written (an error "
-                             "of a degree or a centimetre there costs accuracy)");
-      else if (key != "estimate_extrinsic")
-        unused += (unused.empty() ? "" : ", ") + key + " (" + vins->second + ")";
+      unused += (unused.empty() ? "" : ", ") + key + " (" + vins->second + ")";
       continue;
     }
     std::string nearest;

@@ -174,7 +174,6 @@ void saveConfig(const Config& c, const std::string& path, SavedKeys keys) {
     s += "cam" + std::to_string(i) + "_calib: \"" + name + "\"\n";
   }
   s += "image_width: " + std::to_string(c.image_width) + "\nimage_height: " + std::to_string(c.image_height) + "\n";
-  s += "# VINS-Fusion's key, for its readers: idyvins keeps the extrinsics fixed\nestimate_extrinsic: 0\n";
   for (int i = 0; i < c.num_cam; ++i) s += "body_T_cam" + std::to_string(i) + ":" + matrixYaml(c.T_b_c.at(i).matrix());
   if (keys == SavedKeys::kChanged) {
     const std::map<std::string, std::string> defaults = defaultValues();

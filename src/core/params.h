@@ -10,15 +10,16 @@ namespace idyvins {
 
 /// What a value read from a config must satisfy.
 enum class ParamRule {
-  kAny,          ///< any finite number
-  kPositive,     ///< > 0
-  kNonNegative,  ///< >= 0
-  kOpenUnit,     ///< in (0, 1)
-  kFraction,     ///< in (0, 1]
-  kCorrelation,  ///< in [-1, 1]
-  kImuNoise,     ///< in (0, 10]: an IMU noise density or random walk (SI units) that can be real
-  kGravity,      ///< in [9, 10.5] m/s^2: a gravity magnitude on Earth
-  kTimeOffset,   ///< in [-0.5, 0.5] s: a camera-IMU time offset (a larger one is a unit error)
+  kAny,            ///< any finite number
+  kPositive,       ///< > 0
+  kNonNegative,    ///< >= 0
+  kOpenUnit,       ///< in (0, 1)
+  kFraction,       ///< in (0, 1]
+  kCorrelation,    ///< in [-1, 1]
+  kImuNoise,       ///< in (0, 10]: an IMU noise density or random walk (SI units) that can be real
+  kGravity,        ///< in [9, 10.5] m/s^2: a gravity magnitude on Earth
+  kTimeOffset,     ///< in [-0.5, 0.5] s: a camera-IMU time offset (a larger one is a unit error)
+  kExtrinsicMode,  ///< 0, 1 or 2 (VINS-Fusion's estimate_extrinsic)
 };
 
 /// One config key.

@@ -174,6 +174,7 @@ nlohmann::json StatsRecorder::frameJson(const FrameOutput& out) {
           {"keyframe", r.keyframe},
           {"initialized", r.initialized},
           {"td_s", r.td_s},
+          {"extrinsic", r.extrinsic ? toJson(*r.extrinsic) : nlohmann::json()},
           {"status", r.status}};
 }
 

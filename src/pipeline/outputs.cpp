@@ -38,7 +38,33 @@ nlohmann::json solveProfileJson(const Summary& s) {
           {"mean_post_ms", t.post_ms / n}};
 }
 
+/// The summary's estimate_extrinsic record: both mounts as 4x4 rows, cam0's change from the config.
+nlohmann::json extrinsicJson(const std::optional<ExtrinsicSummary>& e) {
+  if (!e) return nullptr;
+  nlohmann::json mounts = nlohmann::json::array();
+  for (const Eigen::Isometry3d& T : e->T_b_c) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (int i = 0; i < 4; ++i) rows.push_back({T(i, 0), T(i, 1), T(i, 2), T(i, 3)});
+    mounts.push_back(rows);
+  }
+  nlohmann::json j = toJson(e->estimate);
+  j["estimate_extrinsic"] = e->mode;
+  j["body_T_cam"] = mounts;
+  j["rotation_change_deg"] = e->rotation_change_deg;
+  j["translation_change_m"] = e->translation_change_m;
+  return j;
+}
+
 }  // namespace
+
+nlohmann::json toJson(const backend::ExtrinsicEstimate& e) {
+  return {{"t_b_c0", {e.t_b_c0.x(), e.t_b_c0.y(), e.t_b_c0.z()}},
+          {"q_b_c0", {e.q_b_c0.x(), e.q_b_c0.y(), e.q_b_c0.z(), e.q_b_c0.w()}},
+          {"refined", e.open},
+          {"rotation_known", e.rotation_known},
+          {"sigma_t_m", e.sigma_t_m},
+          {"sigma_rot_deg", e.sigma_rot_deg}};
+}
 
 namespace {
 
@@ -187,6 +213,7 @@ nlohmann::json summaryJson(const Result& r, Mode mode, double wall_s) {
       {"imu_spikes", s.imu_spikes},
       {"td_s", s.td_s},
       {"td_estimated", s.td_estimated},
+      {"extrinsic", extrinsicJson(s.extrinsic)},
       {"lost_new_corners_tested", s.lost_tested},
       {"lost_new_corners_moving", s.lost_moving},
       {"lost_tracks", toJson(s.lost_tracks)},

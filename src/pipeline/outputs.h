@@ -14,6 +14,8 @@ namespace idyvins::pipeline {
 /// Why tracks ended (frontend::TrackLosses) as a stats.json object: klt, border, backward,
 /// alignment, pruned.
 nlohmann::json toJson(const frontend::TrackLosses& l);
+/// An extrinsic estimate: t_b_c0 (m), q_b_c0 (x y z w), whether it is refined, its σ (-1: none yet).
+nlohmann::json toJson(const backend::ExtrinsicEstimate& e);
 
 /// Writes into the existing `folder`: trajectory.tum (TUM), trajectory.csv (EuRoC),
 /// state.csv (pose, velocity, biases in EuRoC's ground-truth columns), map_static.ply,

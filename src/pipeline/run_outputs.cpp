@@ -122,6 +122,12 @@ nlohmann::json RunOutputs::write(const System& system, const Result& result, con
     map::saveMap(files_->map_dir, saved);
   }
   addAte(summary, end.groundtruth, result);
+  if (const auto& e = result.summary.extrinsic) {  // the estimate, ready for the next run
+    Config refined = system.config();
+    refined.T_b_c = e->T_b_c;
+    if (refined.estimator.estimate_extrinsic == 2) refined.estimator.estimate_extrinsic = 1;  // a usable guess now
+    saveConfig(refined, dir + "/config_refined.yaml");
+  }
   if (end.record) writeRunJson(dir, *end.record, system.config());
   if (!end.groundtruth.empty()) writeGroundTruthSpan(dir, end.groundtruth, result);
   files_->finishStats(summary);

@@ -122,6 +122,7 @@ System::System(const Config& config, const RunOptions& run)
     throw std::invalid_argument("a pipelined run needs RunOptions::feedback_delay 1");
   if (run_.pipelined) worker_ = std::make_unique<Worker>();
   td_s_ = config_.estimator.td_s;
+  T_b_c0_ = config_.T_b_c.at(0);
   if (config_.loop.enabled) {
     map::LoopOptions loop = config_.loop;
     if (config_.T_b_c.size() > 1)  // the stored landmarks' depth uncertainty
@@ -182,7 +183,7 @@ frontend::MotionPrior System::priorFor(TimeNs t_prev, TimeNs t_cur) const {
     from = imu::integrateBetween(imu_, t_from, t_prev, from.ba, from.bg, config_.imu.noise).predict(from);
     t_from = t_prev;
   }
-  return dynamic::motionPrior(from, t_from, t_cur, imu_, config_.imu.noise, config_.T_b_c[0]);
+  return dynamic::motionPrior(from, t_from, t_cur, imu_, config_.imu.noise, T_b_c0_);
 }
 
 const FrameOutput* System::addFrame(const StereoFrame& frame) {
@@ -270,6 +271,10 @@ void System::finalize(InFlight& f) {
   if (f.out.estimate.reset) parts_->front_end.reset();
   snapshot_ = parts_->estimator.latest();
   td_s_ = parts_->estimator.timeOffset();
+  if (f.out.estimate.extrinsic) {
+    extrinsic_ = f.out.estimate.extrinsic;
+    T_b_c0_ = Eigen::Translation3d(extrinsic_->t_b_c0) * extrinsic_->q_b_c0;
+  }
   // The next priors start at the newest state (or, before there is one, at a frame not
   // older than this one): drop the samples before the last one at or before that time.
   const TimeNs from = snapshot_.valid ? std::min(snapshot_.t_ns, f.out.t_ns) : f.out.t_ns;
@@ -394,6 +399,7 @@ Result System::finish() {
   completeInFlight();
   summary_.td_s = td_s_;
   summary_.td_estimated = config_.estimator.estimate_td;
+  if (config_.estimator.estimate_extrinsic != 0) summary_.extrinsic = extrinsicSummary();
   parts_->estimator.flushMap();
   Result result;
   result.static_map = parts_->estimator.staticMap();
@@ -403,6 +409,24 @@ Result System::finish() {
   result.summary = summary_;
   finishLoops(result);
   return result;
+}
+
+ExtrinsicSummary System::extrinsicSummary() const {
+  ExtrinsicSummary e;
+  e.mode = config_.estimator.estimate_extrinsic;
+  e.estimate = extrinsic_.value_or(backend::ExtrinsicEstimate{});
+  if (!extrinsic_) {  // never initialized: the config's
+    e.estimate.t_b_c0 = config_.T_b_c[0].translation();
+    e.estimate.q_b_c0 = Eigen::Quaterniond(config_.T_b_c[0].linear());
+  }
+  const Eigen::Isometry3d T_b_c0 = Eigen::Translation3d(e.estimate.t_b_c0) * e.estimate.q_b_c0;
+  e.T_b_c = {T_b_c0};
+  for (std::size_t i = 1; i < config_.T_b_c.size(); ++i)  // the pair rigid: cam_i in cam0 as written
+    e.T_b_c.push_back(T_b_c0 * config_.T_b_c[0].inverse() * config_.T_b_c[i]);
+  e.rotation_change_deg =
+      Eigen::Quaterniond(config_.T_b_c[0].linear()).angularDistance(e.estimate.q_b_c0) * 180.0 / M_PI;
+  e.translation_change_m = (config_.T_b_c[0].translation() - e.estimate.t_b_c0).norm();
+  return e;
 }
 
 StampedPose toStampedPose(const StampedState& s) { return {s.t_ns, s.state.p_w_b, s.state.q_w_b}; }

@@ -71,6 +71,15 @@ struct ResetEvent {
   std::string continued_by;
 };
 
+/// estimate_extrinsic: the cameras' mounts at the end of a run against the config's.
+struct ExtrinsicSummary {
+  int mode = 0;  ///< the config's estimate_extrinsic
+  backend::ExtrinsicEstimate estimate;
+  std::vector<Eigen::Isometry3d> T_b_c;  ///< body_T_cam0/1 as estimated (the stereo pair rigid)
+  double rotation_change_deg = 0;        ///< cam0's rotation from the config's
+  double translation_change_m = 0;       ///< cam0's translation from the config's
+};
+
 /// Counters over a whole run.
 struct Summary {
   std::size_t frames = 0;
@@ -81,12 +90,13 @@ struct Summary {
   std::size_t imu_out_of_range = 0, imu_out_of_order = 0;
   /// Short spikes within those limits dropped by the spike gate (imu/spike_gate.h): runs, samples.
   std::size_t imu_spikes = 0, imu_spike_samples = 0;
-  double td_s = 0;                       ///< camera–IMU time offset at the end (the config's td unless estimated)
-  bool td_estimated = false;             ///< the config's estimate_td
-  TimeNs first_t_ns = 0, last_t_ns = 0;  ///< time stamps of the first and last frame
-  TimeNs init_t_ns = -1;                 ///< first initialized frame (-1: never)
-  std::size_t frames_without_prior = 0;  ///< idy modes: frames the IDY filter saw without a motion prior
-  std::size_t frames_stereo_only = 0;    ///< frames carried across an IMU gap by stereo alone (bridge_imu_gaps)
+  double td_s = 0;            ///< camera–IMU time offset at the end (the config's td unless estimated)
+  bool td_estimated = false;  ///< the config's estimate_td
+  std::optional<ExtrinsicSummary> extrinsic;     ///< estimate_extrinsic 1 or 2
+  TimeNs first_t_ns = 0, last_t_ns = 0;          ///< time stamps of the first and last frame
+  TimeNs init_t_ns = -1;                         ///< first initialized frame (-1: never)
+  std::size_t frames_without_prior = 0;          ///< idy modes: frames the IDY filter saw without a motion prior
+  std::size_t frames_stereo_only = 0;            ///< frames carried across an IMU gap by stereo alone (bridge_imu_gaps)
   std::size_t lost_tested = 0, lost_moving = 0;  ///< lost-corner test totals (DESIGN §4.9)
   frontend::TrackLosses lost_tracks, lost_new;   ///< why tracks ended, summed (FeatureFrame)
   double sum_tracking_ms = 0, sum_filter_ms = 0, sum_optimization_ms = 0, sum_marginalization_ms = 0;
@@ -211,8 +221,9 @@ class System {
   bool imuCovers(const StereoFrame& frame) const;  ///< the IMU samples up to imuTime(frame) are here
   void process(const StereoFrame& frame);          ///< front end now, back end now or with the next frame
   frontend::MotionPrior priorFor(TimeNs t_prev, TimeNs t_cur) const;
-  void backEnd(InFlight& f);  ///< estimator and dynamic map of one frame (the worker's job)
-  void completeInFlight();    ///< waits for (or runs) the back end in flight, then finalizes it
+  void backEnd(InFlight& f);                  ///< estimator and dynamic map of one frame (the worker's job)
+  void completeInFlight();                    ///< waits for (or runs) the back end in flight, then finalizes it
+  ExtrinsicSummary extrinsicSummary() const;  ///< the estimate at the end against the config's
   void finalize(InFlight& f);
   void mapLostMoving(const frontend::FeatureFrame& ff, FrameOutput& out);
   void mapEliminated(const frontend::FeatureFrame& ff, FrameOutput& out);
@@ -237,6 +248,10 @@ class System {
   TimeNs last_frame_t_ns_ = -1;          ///< time (IMU clock) of the previous frame given to the front end
   std::deque<StereoFrame> pending_;      ///< frames waiting for the IMU samples up to their time
   double td_s_ = 0;                      ///< camera–IMU offset (s): image stamp + td = IMU clock
+  /// The left camera's mount the motion prior uses: the config's, or the estimator's estimate
+  /// after the last finalized frame (estimate_extrinsic).
+  Eigen::Isometry3d T_b_c0_ = Eigen::Isometry3d::Identity();
+  std::optional<backend::ExtrinsicEstimate> extrinsic_;  ///< the newest estimate (estimate_extrinsic)
   Summary summary_;
   std::vector<StampedState> trajectory_;
   std::vector<backend::MapPoint> eliminated_;  ///< dynamic map: triangulated eliminated features
