@@ -9,10 +9,13 @@
 #              the key was read and ignored) and 1; exact with 1 (its cost); 2 from identity
 #              rotations (the translations as written).
 #   offset:    images stamped -50, -20, +10, +30, +50 ms off (`perturb --fault time-offset`):
-#              td given, and estimate_td 1 from td 0.
+#              td given, and estimate_td 1 from td 0 (VINS-Fusion: VINS_OFFSETS, default -50 30 50).
 #   IMU gap:   0.5 s and 2 s without IMU samples from 8 s on (bridge_imu_gaps 1).
 #   no IMU:    imu: 0 (stereo alone).
-# Usage: bench/calibration.sh IDYVINS WORK [PEERS_ROOT]   (JOBS runs at a time, default 2;
+#   traffic:   mid and high traffic, baseline and idy, with estimate_extrinsic 1 and estimate_td 1
+#              from td 0 (exact calibration), and with imu: 0 (idy's constant-velocity prior).
+# Usage: bench/calibration.sh IDYVINS WORK [PEERS_ROOT]   (JOBS runs at a time, default 2, both
+# programs in one queue;
 # finished runs are kept, so a second call only prints the tables)
 set -euo pipefail
 IDY=$1; WORK=$2; PEERS_ROOT=${3:-}
@@ -27,6 +30,7 @@ mkdir -p "$WORK/runs" "$WORK/vins"
 SEQS=("standard city --seed 1" "standard city --seed 1 --realism euroc" "validation city --seed 2"
       "validation city --seed 2 --realism euroc")
 OFFSETS=(-50 -20 10 30 50)
+VINS_OFFSETS=${VINS_OFFSETS:-"-50 30 50"}  # VINS-Fusion's offset runs (each costs it as much as idyvins)
 CFG=config/sim_stereo_imu_config.yaml
 name() { echo "$1" | sed -e 's/--seed /s/; s/ --realism euroc/_realism/; s/ /_/g'; }
 
@@ -54,7 +58,7 @@ EOF
 }
 
 # Sequences and their faults.
-idy_jobs=(); vins_jobs=()
+idy_jobs=(); vins_jobs=(); TRAFFIC=()
 for s in "${SEQS[@]}"; do
   set -- $s
   n=$(name "$s"); S=$WORK/$n
@@ -86,7 +90,24 @@ for s in "${SEQS[@]}"; do
   for m in "${OFFSETS[@]}"; do
     td=$(awk -v m="$m" 'BEGIN { printf "%.3f", m / 1000 }')
     idy_jobs+=("$R.td$m.given $S.td$m td=$td" "$R.td$m.est $S.td$m estimate_td=1 td=0")
-    vins_jobs+=("$n.td$m.given $S.td$m td=$td" "$n.td$m.est $S.td$m estimate_td=1 td=0")
+    case " $VINS_OFFSETS " in *" $m "*) vins_jobs+=("$n.td$m.given $S.td$m td=$td" "$n.td$m.est $S.td$m estimate_td=1 td=0") ;; esac
+  done
+done
+
+# Traffic with both estimates on (the idy targets: mid <= 0.8x, high <= 0.6x the baseline), and
+# idy's constant-velocity prior without the IMU against the baseline without it.
+declare -A MODE_OF
+for s in "standard city --seed 1" "validation city --seed 2"; do
+  set -- $s
+  for level in mid high; do
+    n=$(name "$s")_$level; S=$WORK/$n; R=$WORK/runs/$n
+    [ -f "$S/meta.json" ] || "$IDY" simulate --family "$1" --scene "$2" --level $level "${@:3}" --duration 20 \
+      --out "$S" > /dev/null 2>&1
+    for mode in baseline idy; do
+      idy_jobs+=("$R.$mode.est $S estimate_extrinsic=1 estimate_td=1 td=0" "$R.$mode.noimu $S imu=0")
+      MODE_OF[$R.$mode.est]=$mode; MODE_OF[$R.$mode.noimu]=$mode
+    done
+    TRAFFIC+=("$n")
   done
 done
 
@@ -112,10 +133,24 @@ vins_run() {
   PEERS_ROOT=$PEERS_ROOT "$PEERS/run_sequence.sh" vins_fusion "$WORK/vins/$n" "$WORK/vins" "$f" > /dev/null 2>&1 ||
     echo "VINS-Fusion failed on $n" >&2
 }
-export IDY WORK PEERS PEERS_ROOT
-export -f sim_run vins_run
-printf '%s\n' "${idy_jobs[@]}" | xargs -P "$JOBS" -L 1 bash -c 'sim_run "$IDY" "$0" "$1" baseline "${@:2}"'
-[ -n "$VINS" ] && printf '%s\n' "${vins_jobs[@]}" | xargs -P "$JOBS" -L 1 bash -c 'vins_run "$0" "$1" "${@:2}"'
+# one_run KIND NAME ...: an idyvins (sim_run, baseline unless the keys say mode=) or VINS-Fusion run.
+one_run() {
+  local kind=$1
+  shift
+  case $kind in
+    idy) sim_run "$IDY" "$@" ;;
+    vins) [ -n "$VINS" ] && vins_run "$@" ;;
+  esac
+  return 0
+}
+export IDY WORK PEERS PEERS_ROOT VINS
+export -f sim_run vins_run one_run
+# One queue for both programs, JOBS at a time (the longest, idyvins', first).
+{
+  for j in "${idy_jobs[@]}"; do set -- $j; echo "idy $1 $2 ${MODE_OF[$1]:-baseline} ${*:3}"; done
+  for j in "${vins_jobs[@]}"; do echo "vins $j"; done
+} | xargs -P "$JOBS" -L 1 bash -c 'one_run "$0" "$@"'
 
 # The tables.
-/usr/bin/python3 "$HERE/calibration_table.py" "$WORK" "${OFFSETS[*]}" $(for s in "${SEQS[@]}"; do name "$s"; done)
+/usr/bin/python3 "$HERE/calibration_table.py" "$WORK" "${OFFSETS[*]}" "${TRAFFIC[*]}" \
+  $(for s in "${SEQS[@]}"; do name "$s"; done)

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The tables of bench/calibration.sh from its runs (WORK/runs: idyvins, WORK/vins: VINS-Fusion).
 
-Usage: calibration_table.py WORK "OFFSETS" SEQ_NAME...
+Usage: calibration_table.py WORK "OFFSETS" "TRAFFIC_SEQ_NAMES" SEQ_NAME...
 Prints markdown: extrinsic faults, time offsets, IMU gaps and stereo alone, each run's ATE RMSE
 (SE3, whole file) and its ratio to the exact run of the same program, the estimates against the
 truth, and the worst ratio of each target over the sequences.
@@ -14,7 +14,7 @@ import sys
 
 import numpy as np
 
-WORK, OFFSETS, SEQS = sys.argv[1], [int(x) for x in sys.argv[2].split()], sys.argv[3:]
+WORK, OFFSETS, TRAFFIC, SEQS = sys.argv[1], [int(x) for x in sys.argv[2].split()], sys.argv[3].split(), sys.argv[4:]
 NAN = float("nan")
 
 
@@ -135,6 +135,20 @@ for n in SEQS:
     track("imu: 0 / VINS-Fusion imu: 0 (target 1x)", no, vins(n + ".noimu"))
     print("| %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (n, m(ex), cells[0], cells[1], m(no), m(vins(n + ".exact")),
                                                           m(vins(n + ".gap0.5")), m(vins(n + ".gap2")), m(vins(n + ".noimu"))))
+
+print("\n**Traffic** (ATE m; estimate_extrinsic 1, estimate_td 1 from td 0; imu: 0: idy's constant-velocity prior)\n")
+print("| sequence | baseline, estimating | idy, estimating | idy / baseline | baseline, imu: 0 | idy, imu: 0 | "
+      "idy / baseline |")
+print("| --- " * 7 + "|")
+for n in TRAFFIC:
+    b, i = ate(n + ".baseline.est"), ate(n + ".idy.est")
+    bn, inn = ate(n + ".baseline.noimu"), ate(n + ".idy.noimu")
+    target = 0.8 if n.endswith("_mid") else 0.6
+    worst.setdefault("traffic, idy / baseline, estimating (target mid 0.8x, high 0.6x): worst ratio / target", 0)
+    if not (math.isnan(b) or math.isnan(i)):
+        k = "traffic, idy / baseline, estimating (target mid 0.8x, high 0.6x): worst ratio / target"
+        worst[k] = max(worst[k], i / b / target)
+    print("| %s | %s | %s | %s | %s | %s | %s |" % (n, m(b), m(i), r(i, b), m(bn), m(inn), r(inn, bn)))
 
 print("\n**Worst over the sequences**\n")
 print("| figure | worst |")

@@ -94,6 +94,29 @@ TEST(MotionPrior, ExactConjugationWithTheExtrinsic) {
   EXPECT_NEAR(credibility(p), (1 + s) * (1 + s), 1e-12);
 }
 
+TEST(ConstantVelocityMotion, ExtrapolatesTheNewestTwistAndGrowsItsUncertaintyWithTheInterval) {
+  // A body turning at 0.4 rad/s about its z while moving 2 m/s along its x: over 50 ms the
+  // relative motion is the same whichever 50 ms it is.
+  const auto pose = [](double t) {
+    const double yaw = 0.4 * t;
+    return Eigen::Translation3d(Vector3d(2.0 * t, 0.1 * t, 0)) * Eigen::AngleAxisd(yaw, Vector3d::UnitZ());
+  };
+  const TimeNs a = 1'000'000'000, b = 1'050'000'000;
+  const Eigen::Isometry3d Ta(pose(1.0)), Tb(pose(1.05));
+  const imu::RelativeMotion m = constantVelocityMotion(Ta, a, Tb, b, b, b + 50'000'000, 2.0);
+  const Eigen::Isometry3d rel = Ta.inverse() * Tb;
+  EXPECT_LT(m.q_bi_bj.angularDistance(Eigen::Quaterniond(rel.linear())), 1e-12);
+  EXPECT_LT((m.p_bi_bj - rel.translation()).norm(), 1e-12);
+  EXPECT_NEAR(std::sqrt(m.cov_p(0, 0)), 0.5 * 2.0 * 0.05 * 0.05, 1e-15);
+  // Twice the interval: twice the rotation angle and the translation, four times the σ.
+  const imu::RelativeMotion m2 = constantVelocityMotion(Ta, a, Tb, b, b, b + 100'000'000, 2.0);
+  EXPECT_NEAR(Eigen::AngleAxisd(m2.q_bi_bj).angle(), 2 * 0.4 * 0.05, 1e-12);
+  EXPECT_LT((m2.p_bi_bj - 2 * rel.translation()).norm(), 1e-12);
+  EXPECT_NEAR(std::sqrt(m2.cov_p(2, 2)), 4 * std::sqrt(m.cov_p(2, 2)), 1e-15);
+  // Out-of-order times give no motion rather than a wrong one.
+  EXPECT_EQ(constantVelocityMotion(Tb, b, Ta, a, b, b + 1, 2.0).p_bi_bj.norm(), 0.0);
+}
+
 TEST(Elimination, RecursionsEqualDirectRecomputation) {
   std::mt19937 rng(3);
   std::chi_squared_distribution<double> chi(1.0);

@@ -33,6 +33,8 @@ constexpr double kMinSpeedForTd = 0.2;
 /// first start"); an earlier failure restarts the biases as a first start does.
 constexpr int kSettledFrames = 2 * kWindowSize;
 /// At initialization the offset is searched within ± this (s) of the config's (estimate_td).
+/// ±60 ms with up to three restarts was measured and not kept: on the street renders the
+/// rotations' alignment then found offsets 50 ms off (docs/results.md, A rig off the bench).
 constexpr double kTdInitSearchS = 0.03;
 /// A rotation-aligned offset this far (s) from the current one restarts the initialization.
 constexpr double kTdInitRestartS = 0.001;

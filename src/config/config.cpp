@@ -370,8 +370,10 @@ void checkTogether(const YamlFile& f, const std::string& mode_name, Config& c) {
   if (!c.use_imu && !f.root["mode"] &&
       traitsOf(c.mode).filter == FilterKind::kIdy) {  // a VINS-Fusion stereo-only config as it is
     c.mode = Mode::kBaseline;
-    c.warnings.push_back(f.path +
-                         ": imu: 0 and no mode key: mode baseline (the idy modes need the IMU's motion prior)");
+    c.warnings.push_back(
+        f.path +
+        ": imu: 0 and no mode key: mode baseline (idy without the IMU takes a constant-velocity motion "
+        "prior, worth it on some traffic and not on other: docs/results.md)");
   }
   if (c.idy.lambda_dy_c > c.idy.lambda_dy)
     throw InputError(f.path, "lambda_dy_c (" + std::to_string(c.idy.lambda_dy_c) + ") must not exceed lambda_dy (" +

@@ -40,6 +40,21 @@ frontend::MotionPrior motionPrior(const imu::NavState& s, TimeNs t_prev, TimeNs 
   return cameraMotionPrior(pre.relativeMotion(s), T_b_c);
 }
 
+imu::RelativeMotion constantVelocityMotion(const Eigen::Isometry3d& T_w_b_older, TimeNs t_older,
+                                           const Eigen::Isometry3d& T_w_b_newer, TimeNs t_newer, TimeNs t_prev,
+                                           TimeNs t_cur, double acc_sigma) {
+  imu::RelativeMotion m;
+  if (t_newer <= t_older || t_cur <= t_prev) return m;
+  const double dt = 1e-9 * static_cast<double>(t_cur - t_prev);
+  const double scale = dt / (1e-9 * static_cast<double>(t_newer - t_older));
+  const Eigen::Isometry3d rel = T_w_b_older.inverse() * T_w_b_newer;
+  m.q_bi_bj = expQuat(scale * logQuat(Eigen::Quaterniond(rel.linear())));
+  m.p_bi_bj = scale * rel.translation();
+  const double sigma = 0.5 * acc_sigma * dt * dt;
+  m.cov_p = sigma * sigma * Matrix3d::Identity();
+  return m;
+}
+
 double credibility(const frontend::MotionPrior& p) {
   const double t = p.t_prev_cur.norm();
   if (t < 1e-9) return 1.0;

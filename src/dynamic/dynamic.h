@@ -29,6 +29,15 @@ frontend::MotionPrior motionPrior(const imu::NavState& state_prev, TimeNs t_prev
                                   const std::vector<ImuSample>& imu, const ImuNoise& noise,
                                   const Eigen::Isometry3d& T_b_c);
 
+/// Extension (not in the paper), imu: 0: the body motion over [t_prev, t_cur] at the constant
+/// velocity, linear and angular, between the two newest states (T_w_b at t_older and t_newer,
+/// t_older < t_newer), with the position covariance of an unmodelled acceleration σ_a:
+/// (½ σ_a Δt²)² I. The twist is the pair's relative motion in the older body frame, scaled by
+/// Δt / (t_newer − t_older) (rotation vector and translation alike).
+imu::RelativeMotion constantVelocityMotion(const Eigen::Isometry3d& T_w_b_older, TimeNs t_older,
+                                           const Eigen::Isometry3d& T_w_b_newer, TimeNs t_newer, TimeNs t_prev,
+                                           TimeNs t_cur, double acc_sigma);
+
 /// Credibility factor Σ = (1 + σ_P / ‖t_c‖)², σ_P² = trace of the position covariance (eq. 3c).
 double credibility(const frontend::MotionPrior& prior);
 

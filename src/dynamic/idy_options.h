@@ -67,6 +67,10 @@ struct IdyOptions {
   /// Judged moved only when the best ZNCC of the first patch near the prediction is below
   /// this (a corner on a silhouette still half matches over the background).
   double lost_max_zncc = 0.5;
+  /// Extension (not in the paper), imu: 0: the motion prior is the window's constant-velocity
+  /// prediction; its position uncertainty is that of an unmodelled acceleration of this σ
+  /// (½ σ Δt² per axis), which the credibility factor (eq. 3c) turns into tolerance.
+  double cv_prior_acc_sigma = 2.0;
 
   // Set by the rig (config/modes.h), not a config key.
   /// Left camera -> right camera; the stereo motion test runs only with it.
@@ -104,6 +108,9 @@ struct IdyOptions {
              ParamRule::kNonNegative},
             m.min_disparity_px);
     v.param({"stereo_motion_shape", "0/1, each feature's noise shaped by its structure tensor"}, m.shape);
+    v.param({"cv_prior_acc_sigma", "m/s^2, imu: 0: unmodelled acceleration of the constant-velocity motion prior",
+             ParamRule::kPositive},
+            cv_prior_acc_sigma);
     v.section("IDY-VINS lost-corner test (lost_track_test)");
     v.param({"lost_stereo_sigma_px", "px, match noise behind the depth tolerance", ParamRule::kPositive},
             lost_stereo_sigma_px);

@@ -20,9 +20,6 @@ namespace idyvins::pipeline {
 void checkRunnable(const Config& config) {
   if (config.num_cam != 2 || config.T_b_c.size() < 2)
     throw InputError(config.path, "idyvins runs stereo configs only (num_of_cam: 2; imu: 1 or 0)");
-  if (!config.use_imu && usesIdyFilter(config.mode))
-    throw InputError(config.path, std::string("imu: 0 runs modes baseline, ransac and seg: ") + toString(config.mode) +
-                                      " needs the IMU's motion prior");
   if (!config.use_imu && config.estimator.estimate_td)
     throw InputError(config.path, "imu: 0 with estimate_td: 1: without an IMU there is no offset to estimate");
 }
@@ -174,6 +171,15 @@ void System::addImu(const ImuSample& sample) {
 frontend::MotionPrior System::priorFor(TimeNs t_prev, TimeNs t_cur) const {
   const backend::LatestState& s = snapshot_;
   if (!usesIdyFilter(mode_) || !s.valid) return {};
+  if (!config_.use_imu) {  // imu: 0: the window's constant-velocity prediction
+    if (trajectory_.size() < 2) return {};
+    const StampedState& a = trajectory_[trajectory_.size() - 2];
+    const StampedState& b = trajectory_.back();
+    const auto pose = [](const StampedState& x) { return Eigen::Translation3d(x.state.p_w_b) * x.state.q_w_b; };
+    return dynamic::cameraMotionPrior(dynamic::constantVelocityMotion(pose(a), a.t_ns, pose(b), b.t_ns, t_prev, t_cur,
+                                                                      config_.idy.cv_prior_acc_sigma),
+                                      T_b_c0_);
+  }
   imu::NavState from = s.state;
   TimeNs t_from = s.t_ns;
   // The newest finished state is older than the previous frame (feedback_delay 1): predict
