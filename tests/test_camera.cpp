@@ -28,6 +28,27 @@ CameraParams fisheye() {  // typical equidistant calibration (TUM-VI-like values
   return p;
 }
 
+CameraParams meiMynt() {  // VINS-Fusion's MYNT EYE left camera (config/mynteye/left_mei.yaml)
+  CameraParams p;
+  p.type = ModelType::kMei;
+  p.name = "MeiMyntEye";
+  p.width = 752;
+  p.height = 480;
+  p.xi = 1.4456544769803834;
+  p.dist = {-0.34363053357673362, 0.062347376791548004, 1.2608078788285675e-03, -2.1374139252651483e-04};
+  p.fx = 895.94371861807986, p.fy = 897.41581479032754, p.cx = 372.21680816143993, p.cy = 238.33534175557006;
+  return p;
+}
+
+CameraParams meiEuroc() {  // VINS-Fusion's EuRoC cam0 as MEI (config/euroc/cam0_mei.yaml): ξ 3.6
+  CameraParams p = meiMynt();
+  p.name = "MeiEuroc";
+  p.xi = 3.6313355285286337;
+  p.dist = {1.1757726639872075, 15.491281051140213, -8.1237172954550494e-04, 6.7297684030310243e-04};
+  p.fx = 2138.7619122017772, p.fy = 2131.5886210259278, p.cx = 361.19856633263799, p.cy = 248.27644773395667;
+  return p;
+}
+
 /// Random points in front of the camera that land inside the image.
 std::vector<Eigen::Vector3d> pointsInView(const CameraModel& cam, int n, unsigned seed) {
   std::mt19937 rng(seed);
@@ -86,9 +107,89 @@ TEST(PinholeRadtan, ImageCornersRoundTrip) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, CameraModels, ::testing::Values(eurocCam0(), fisheye()), [](const auto& info) {
-  return std::string(info.param.type == ModelType::kPinhole ? "PinholeRadtan" : "KannalaBrandt");
-});
+TEST_P(CameraModels, EveryPixelOfTheImageRoundTrips) {
+  // Every 8th pixel of the whole image (corners included) lifted and projected back.
+  const auto cam = makeCamera(GetParam());
+  const int w = cam->params().width, h = cam->params().height;
+  int lifted = 0, total = 0;
+  double worst = 0;
+  const auto grid = [](int n) {  // 0, 8, 16, ... and the last pixel
+    std::vector<int> g;
+    for (int i = 0; i < n - 1; i += 8) g.push_back(i);
+    g.push_back(n - 1);
+    return g;
+  };
+  for (const int v : grid(h))
+    for (const int u : grid(w)) {
+      ++total;
+      Eigen::Vector2d xy, back;
+      if (!cam->liftToNormalized(Eigen::Vector2d(u, v), xy)) continue;
+      ++lifted;
+      ASSERT_TRUE(cam->projectNormalized(xy, back)) << u << " " << v;
+      worst = std::max(worst, (back - Eigen::Vector2d(u, v)).norm());
+    }
+  EXPECT_LT(worst, 1e-7);
+  // A pinhole and these calibrations see their whole image in front of the camera; only the
+  // 195° fisheye's corners look backwards.
+  if (GetParam().type == ModelType::kKannalaBrandt) {
+    EXPECT_GT(lifted, total * 3 / 4);
+  } else {
+    EXPECT_EQ(lifted, total);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, CameraModels, ::testing::Values(eurocCam0(), fisheye(), meiMynt(), meiEuroc()),
+                         [](const auto& info) {
+                           if (info.param.type == ModelType::kMei) return info.param.name;
+                           return std::string(info.param.type == ModelType::kPinhole ? "PinholeRadtan"
+                                                                                     : "KannalaBrandt");
+                         });
+
+TEST(Mei, MatchesTheUnifiedModelFormula) {
+  const CameraParams p = meiMynt();
+  const auto cam = makeCamera(p);
+  // p = (0.6, -0.4, 2): on the sphere, then through the point ξ behind its centre.
+  const Eigen::Vector3d pt(0.6, -0.4, 2.0);
+  const double zz = pt.z() + p.xi * pt.norm();
+  const double x = pt.x() / zz, y = pt.y() / zz, r2 = x * x + y * y;
+  const double rad = 1 + p.dist[0] * r2 + p.dist[1] * r2 * r2;
+  const double xd = x * rad + 2 * p.dist[2] * x * y + p.dist[3] * (r2 + 2 * x * x);
+  const double yd = y * rad + p.dist[2] * (r2 + 2 * y * y) + 2 * p.dist[3] * x * y;
+  Eigen::Vector2d uv;
+  ASSERT_TRUE(cam->project(pt, uv));
+  EXPECT_NEAR(uv.x(), p.fx * xd + p.cx, 1e-9);
+  EXPECT_NEAR(uv.y(), p.fy * yd + p.cy, 1e-9);
+  // ξ = 0 without distortion is a pinhole of focal γ.
+  CameraParams pin = p;
+  pin.xi = 0;
+  pin.dist = {0, 0, 0, 0};
+  ASSERT_TRUE(makeCamera(pin)->project(pt, uv));
+  EXPECT_NEAR(uv.x(), p.fx * 0.3 + p.cx, 1e-9);
+  EXPECT_NEAR(uv.y(), p.fy * -0.2 + p.cy, 1e-9);
+}
+
+TEST(Mei, AWideLensSeesBehindItsPlaneOnTheSphereOnly) {
+  // ξ = 1 (parabolic), γ small enough that the image holds rays beyond 90°.
+  CameraParams p = meiMynt();
+  p.xi = 1.0;
+  p.dist = {0, 0, 0, 0};
+  p.fx = p.fy = 150.0;
+  const Mei cam(p);
+  const double theta = 1.8;  // 103° from the axis
+  const Eigen::Vector3d ray(std::sin(theta), 0.0, std::cos(theta));
+  Eigen::Vector2d uv, xy;
+  Eigen::Vector3d back;
+  ASSERT_TRUE(cam.project(ray, uv));
+  ASSERT_TRUE(cam.liftToSphere(uv, back));
+  EXPECT_LT((back - ray).norm(), 1e-10);
+  EXPECT_FALSE(cam.liftToNormalized(uv, xy)) << "a ray behind the image plane has no x/z";
+  // Beyond the fold of ξ = 2 (z/|p| <= -1/2) two rays share a pixel: not imaged.
+  p.xi = 2.0;
+  EXPECT_FALSE(Mei(p).project(Eigen::Vector3d(std::sin(2.2), 0, std::cos(2.2)), uv));
+  EXPECT_TRUE(Mei(p).project(Eigen::Vector3d(std::sin(1.9), 0, std::cos(1.9)), uv));
+  // Its focal for pixel thresholds is γ / (1 + ξ), the scale at the principal point.
+  EXPECT_NEAR(Mei(p).focal(), 150.0 / 3.0, 1e-12);
+}
 
 TEST(PinholeRadtan, MatchesTheDistortionFormula) {
   const auto cam = makeCamera(eurocCam0());

@@ -360,8 +360,41 @@ TEST(Config, NonRigidTransformRefused) {
 
 TEST(Config, UnknownCameraModel) {
   TempDir dir;
-  const auto path = writeConfig(dir, kConfig, replace(kCamera, "PINHOLE", "MEI"));
-  expectError([&] { loadConfig(path); }, "cam.yaml:3: unknown camera model 'MEI'");
+  const auto path = writeConfig(dir, kConfig, replace(kCamera, "PINHOLE", "SCARAMUZZA"));
+  expectError([&] { loadConfig(path); }, "cam.yaml:3: unknown camera model 'SCARAMUZZA'");
+}
+
+TEST(Config, MeiCameraAsCamodocalWritesItAndBack) {
+  // The layout of camodocal's MEI files (VINS-Fusion's MYNT EYE and EuRoC *_mei.yaml), with
+  // the MYNT EYE left camera's published numbers.
+  TempDir dir;
+  writeFile(dir / "mei.yaml",
+            "%YAML:1.0\n---\nmodel_type: MEI\ncamera_name: camera\nimage_width: 752\nimage_height: 480\n"
+            "mirror_parameters:\n   xi: 1.4456544769803834e+00\ndistortion_parameters:\n"
+            "   k1: -3.4363053357673362e-01\n   k2: 6.2347376791548004e-02\n   p1: 1.2608078788285675e-03\n"
+            "   p2: -2.1374139252651483e-04\nprojection_parameters:\n   gamma1: 8.9594371861807986e+02\n"
+            "   gamma2: 8.9741581479032754e+02\n   u0: 3.7221680816143993e+02\n   v0: 2.3833534175557006e+02\n");
+  const auto cam = loadCameraFile(dir / "mei.yaml");
+  EXPECT_EQ(cam.type, camera::ModelType::kMei);
+  EXPECT_DOUBLE_EQ(cam.xi, 1.4456544769803834);
+  EXPECT_DOUBLE_EQ(cam.dist[0], -0.34363053357673362);
+  EXPECT_DOUBLE_EQ(cam.dist[3], -2.1374139252651483e-04);
+  EXPECT_DOUBLE_EQ(cam.fx, 895.94371861807986);
+  EXPECT_DOUBLE_EQ(cam.fy, 897.41581479032754);
+  EXPECT_DOUBLE_EQ(cam.cx, 372.21680816143993);
+  EXPECT_DOUBLE_EQ(cam.cy, 238.33534175557006);
+  saveCameraFile(cam, dir / "back.yaml");
+  const auto back = loadCameraFile(dir / "back.yaml");
+  EXPECT_EQ(back.type, camera::ModelType::kMei);
+  EXPECT_EQ(back.xi, cam.xi);
+  EXPECT_EQ(back.dist, cam.dist);
+  EXPECT_EQ(back.fx, cam.fx);
+  EXPECT_EQ(back.cy, cam.cy);
+  // A mirror parameter out of range, and a missing block, are named with their line.
+  writeFile(dir / "bad.yaml", replace(readFile(dir / "mei.yaml"), "xi: 1.44", "xi: -1.44"));
+  expectError([&] { loadCameraFile(dir / "bad.yaml"); }, "bad.yaml:8: expected the mirror parameter xi in [0, 10]");
+  writeFile(dir / "nomirror.yaml", replace(readFile(dir / "mei.yaml"), "mirror_parameters", "mirror"));
+  expectError([&] { loadCameraFile(dir / "nomirror.yaml"); }, "missing required key 'mirror_parameters'");
 }
 
 TEST(Config, TrackerImageKeys) {

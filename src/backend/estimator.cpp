@@ -33,10 +33,10 @@ Estimator::Estimator(const camera::Rig& cameras, const ImuNoise& noise, const Es
   rig_.T_b_c0 = toExtrinsic(cameras.T_b_c[0]);
   rig_.stereo = cameras.stereo();
   if (rig_.stereo) rig_.T_b_c1 = toExtrinsic(cameras.T_b_c[1]);
-  rig_.focal_px = 0.5 * (cameras.cams[0].fx + cameras.cams[0].fy);
-  const bool fisheye = cameras.cams[0].type == camera::ModelType::kKannalaBrandt;
-  rig_.fx = fisheye ? rig_.focal_px : cameras.cams[0].fx;
-  rig_.fy = fisheye ? rig_.focal_px : cameras.cams[0].fy;
+  const auto f = camera::pixelsPerNormalized(cameras.cams[0]);
+  rig_.focal_px = 0.5 * (f[0] + f[1]);
+  rig_.fx = f[0];
+  rig_.fy = f[1];
   noise_ = noise;
   w_.td_s = options.td_s;
   ex_.start = rig_.T_b_c0;

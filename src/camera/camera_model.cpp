@@ -7,12 +7,10 @@ namespace idyvins::camera {
 namespace {
 constexpr int kMaxIterations = 30;
 constexpr double kTolerance = 1e-13;  // on the distorted normalized coordinates
-}  // namespace
 
-// ---------------------------------------------------------------- pinhole + radtan
-
-Eigen::Vector2d PinholeRadtan::distort(const Eigen::Vector2d& xy, Eigen::Matrix2d* d_xyd_d_xy) const {
-  const double k1 = params_.dist[0], k2 = params_.dist[1], p1 = params_.dist[2], p2 = params_.dist[3];
+/// Radial-tangential distortion (k1 k2 p1 p2) of a point xy; its Jacobian when non-null.
+Eigen::Vector2d radtan(const std::array<double, 4>& dist, const Eigen::Vector2d& xy, Eigen::Matrix2d* d_xyd_d_xy) {
+  const double k1 = dist[0], k2 = dist[1], p1 = dist[2], p2 = dist[3];
   const double x = xy.x(), y = xy.y();
   const double r2 = x * x + y * y;
   const double radial = 1.0 + k1 * r2 + k2 * r2 * r2;
@@ -27,6 +25,26 @@ Eigen::Vector2d PinholeRadtan::distort(const Eigen::Vector2d& xy, Eigen::Matrix2
     J(1, 1) = radial + 2.0 * y * y * d_radial_d_r2 + 6.0 * p1 * y + 2.0 * p2 * x;
   }
   return xyd;
+}
+
+/// Newton on radtan(xy) = xyd from xyd; false when it does not reach 1e-10.
+bool undistortRadtan(const std::array<double, 4>& dist, const Eigen::Vector2d& xyd, Eigen::Vector2d& xy) {
+  xy = xyd;
+  for (int it = 0; it < kMaxIterations; ++it) {
+    Eigen::Matrix2d J;
+    const Eigen::Vector2d err = radtan(dist, xy, &J) - xyd;
+    if (err.norm() < kTolerance) return true;
+    xy -= J.lu().solve(err);
+    if (!xy.allFinite()) return false;
+  }
+  return (radtan(dist, xy, nullptr) - xyd).norm() < 1e-10;
+}
+}  // namespace
+
+// ---------------------------------------------------------------- pinhole + radtan
+
+Eigen::Vector2d PinholeRadtan::distort(const Eigen::Vector2d& xy, Eigen::Matrix2d* d_xyd_d_xy) const {
+  return radtan(params_.dist, xy, d_xyd_d_xy);
 }
 
 bool PinholeRadtan::project(const Eigen::Vector3d& p_c, Eigen::Vector2d& uv,
@@ -47,15 +65,7 @@ bool PinholeRadtan::project(const Eigen::Vector3d& p_c, Eigen::Vector2d& uv,
 
 bool PinholeRadtan::liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d& xy) const {
   const Eigen::Vector2d xyd((uv.x() - params_.cx) / params_.fx, (uv.y() - params_.cy) / params_.fy);
-  xy = xyd;  // Newton on distort(xy) = xyd, starting from the distorted point
-  for (int it = 0; it < kMaxIterations; ++it) {
-    Eigen::Matrix2d J;
-    const Eigen::Vector2d err = distort(xy, &J) - xyd;
-    if (err.norm() < kTolerance) return true;
-    xy -= J.lu().solve(err);
-    if (!xy.allFinite()) return false;
-  }
-  return (distort(xy) - xyd).norm() < 1e-10;
+  return undistortRadtan(params_.dist, xyd, xy);
 }
 
 // ---------------------------------------------------------------- Kannala-Brandt
@@ -126,12 +136,57 @@ bool KannalaBrandt::liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d&
   return true;
 }
 
+// ---------------------------------------------------------------- Mei (unified omnidirectional)
+
+bool Mei::project(const Eigen::Vector3d& p_c, Eigen::Vector2d& uv, Eigen::Matrix<double, 2, 3>* d_uv_d_p) const {
+  const double xi = params_.xi, n = p_c.norm();
+  if (n < 1e-12) return false;
+  if (xi > 1.0 && p_c.z() <= -n / xi) return false;  // beyond the fold: two rays share a pixel
+  const double zz = p_c.z() + xi * n;
+  if (!(zz > 1e-9)) return false;
+  const Eigen::Vector2d mu(p_c.x() / zz, p_c.y() / zz);
+  Eigen::Matrix2d d_md_d_mu;
+  const Eigen::Vector2d md = radtan(params_.dist, mu, d_uv_d_p ? &d_md_d_mu : nullptr);
+  uv << params_.fx * md.x() + params_.cx, params_.fy * md.y() + params_.cy;
+  if (d_uv_d_p) {
+    // m_u = (x, y) / zz with zz = z + ξ ‖p‖: dzz/dp = ξ p / ‖p‖ + e_z
+    const Eigen::RowVector3d d_zz = xi / n * p_c.transpose() + Eigen::RowVector3d(0, 0, 1);
+    Eigen::Matrix<double, 2, 3> d_mu_d_p;
+    d_mu_d_p.row(0) = (Eigen::RowVector3d(1, 0, 0) - mu.x() * d_zz) / zz;
+    d_mu_d_p.row(1) = (Eigen::RowVector3d(0, 1, 0) - mu.y() * d_zz) / zz;
+    *d_uv_d_p = Eigen::DiagonalMatrix<double, 2>(params_.fx, params_.fy) * d_md_d_mu * d_mu_d_p;
+  }
+  return true;
+}
+
+bool Mei::liftToSphere(const Eigen::Vector2d& uv, Eigen::Vector3d& ray) const {
+  const Eigen::Vector2d md((uv.x() - params_.cx) / params_.fx, (uv.y() - params_.cy) / params_.fy);
+  Eigen::Vector2d mu;
+  if (!undistortRadtan(params_.dist, md, mu)) return false;
+  // The sphere point whose projection is m_u: λ (m_u, 1) − (0, 0, ξ) with ‖·‖ = 1.
+  const double xi = params_.xi, r2 = mu.squaredNorm();
+  const double disc = 1.0 + (1.0 - xi * xi) * r2;
+  if (disc < 0) return false;  // outside the image of the sphere (ξ > 1)
+  const double lambda = (xi + std::sqrt(disc)) / (1.0 + r2);
+  ray << lambda * mu.x(), lambda * mu.y(), lambda - xi;
+  return xi <= 1.0 || ray.z() > -1.0 / xi;
+}
+
+bool Mei::liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d& xy) const {
+  Eigen::Vector3d ray;
+  if (!liftToSphere(uv, ray) || !(ray.z() > 1e-6)) return false;  // not in front of the camera
+  xy = ray.head<2>() / ray.z();
+  return true;
+}
+
 std::unique_ptr<CameraModel> makeCamera(const CameraParams& params) {
   switch (params.type) {
     case ModelType::kPinhole:
       return std::make_unique<PinholeRadtan>(params);
     case ModelType::kKannalaBrandt:
       return std::make_unique<KannalaBrandt>(params);
+    case ModelType::kMei:
+      return std::make_unique<Mei>(params);
   }
   return nullptr;
 }

@@ -1,7 +1,7 @@
 #pragma once
-// Projection models: pinhole + radial-tangential and equidistant (Kannala-Brandt)
-// fisheye. Points are in the camera frame (x right, y down, z forward); pixels
-// are distorted image coordinates; "normalized" means undistorted (x/z, y/z).
+// Projection models: pinhole + radial-tangential, equidistant (Kannala-Brandt)
+// fisheye and the unified omnidirectional model (Mei). Points are in the camera frame (x right, y down, z forward);
+// pixels are distorted image coordinates; "normalized" means undistorted (x/z, y/z).
 
 #include <Eigen/Core>
 #include <memory>
@@ -31,8 +31,12 @@ class CameraModel {
   }
 
   const CameraParams& params() const { return params_; }
-  /// Mean focal length in pixels (for pixel-unit thresholds on normalized errors).
-  double focal() const { return 0.5 * (params_.fx + params_.fy); }
+  /// Mean pixels per normalized unit at the principal point (for pixel-unit thresholds on
+  /// normalized errors): the mean focal length of a pinhole (pixelsPerNormalized).
+  double focal() const {
+    const auto f = pixelsPerNormalized(params_);
+    return 0.5 * (f[0] + f[1]);
+  }
 
  protected:
   CameraParams params_;
@@ -58,6 +62,21 @@ class KannalaBrandt final : public CameraModel {
   bool liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d& xy) const override;
   /// Distorted radius r(θ) and its derivative.
   double radius(double theta, double* d_r_d_theta = nullptr) const;
+};
+
+/// Unified omnidirectional model (Mei 2007; camodocal MEI): the point goes onto the unit sphere,
+/// then through a pinhole ξ behind the sphere's centre, m_u = (x, y) / (z + ξ ‖p‖); m_u is
+/// distorted by radtan (k1 k2 p1 p2) and scaled by γ1 γ2 about u0 v0. Rays with
+/// z / ‖p‖ ≤ −1/ξ (beyond the model's fold, ξ > 1) are not imaged.
+class Mei final : public CameraModel {
+ public:
+  using CameraModel::CameraModel;
+  bool project(const Eigen::Vector3d& p_c, Eigen::Vector2d& uv,
+               Eigen::Matrix<double, 2, 3>* d_uv_d_p = nullptr) const override;
+  bool liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d& xy) const override;
+  /// The ray of a pixel on the unit sphere (also behind the camera, z ≤ 0); false when the
+  /// undistortion does not converge or the pixel is outside the model's image.
+  bool liftToSphere(const Eigen::Vector2d& uv, Eigen::Vector3d& ray) const;
 };
 
 /// Builds the model the parameters name.

@@ -8,8 +8,16 @@ const char* toString(ModelType type) {
       return "PINHOLE";
     case ModelType::kKannalaBrandt:
       return "KANNALA_BRANDT";
+    case ModelType::kMei:
+      return "MEI";
   }
   return "?";
+}
+
+std::array<double, 2> pixelsPerNormalized(const CameraParams& p) {
+  if (p.type == ModelType::kPinhole) return {p.fx, p.fy};
+  const double f = 0.5 * (p.fx + p.fy) / (p.type == ModelType::kMei ? 1.0 + p.xi : 1.0);
+  return {f, f};
 }
 
 }  // namespace idyvins::camera

@@ -163,6 +163,24 @@ auto refusingYamlErrors(const std::string& path, Read read) {
 
 }  // namespace
 
+namespace {
+
+/// Plausible for a real camera: focal lengths up to 100 image widths (a 0.6 degree view), the
+/// principal point inside the image. Throws InputError.
+void checkIntrinsics(const std::string& path, const camera::CameraParams& cam) {
+  const double max_f = 100.0 * std::max(cam.width, cam.height);
+  if (!(cam.fx > 0 && cam.fy > 0 && cam.fx <= max_f && cam.fy <= max_f))
+    throw InputError(path, "expected focal lengths in (0, " + std::to_string(static_cast<int>(max_f)) + "] px for a " +
+                               std::to_string(cam.width) + "x" + std::to_string(cam.height) + " image, got " +
+                               std::to_string(cam.fx) + ", " + std::to_string(cam.fy));
+  if (!(cam.cx >= 0 && cam.cx <= cam.width && cam.cy >= 0 && cam.cy <= cam.height))
+    throw InputError(path, "expected the principal point inside the " + std::to_string(cam.width) + "x" +
+                               std::to_string(cam.height) + " image, got (" + std::to_string(cam.cx) + ", " +
+                               std::to_string(cam.cy) + ")");
+}
+
+}  // namespace
+
 camera::CameraParams loadCameraFile(const std::string& path) {
   return refusingYamlErrors(path, [&] { return readCameraFile(path); });
 }
@@ -170,7 +188,7 @@ camera::CameraParams loadCameraFile(const std::string& path) {
 camera::CameraParams readCameraFile(const std::string& path) {
   const YamlFile f = loadYaml(path);
   camera::CameraParams cam;
-  const YAML::Node model_node = require(f, f.root, "model_type", "PINHOLE or KANNALA_BRANDT");
+  const YAML::Node model_node = require(f, f.root, "model_type", "PINHOLE, KANNALA_BRANDT or MEI");
   const std::string model = scalarAs<std::string>(f, model_node, "model_type", "a string");
   if (f.root["camera_name"]) cam.name = getString(f, f.root, "camera_name", "");
   cam.width = getInt(f, f.root, "image_width", "pixels");
@@ -196,21 +214,26 @@ camera::CameraParams readCameraFile(const std::string& path) {
     cam.fy = getDouble(f, p, "mv", "projection_parameters");
     cam.cx = getDouble(f, p, "u0", "projection_parameters");
     cam.cy = getDouble(f, p, "v0", "projection_parameters");
+  } else if (model == "MEI") {
+    cam.type = camera::ModelType::kMei;
+    const YAML::Node m = require(f, f.root, "mirror_parameters", "map with xi");
+    const YAML::Node d = require(f, f.root, "distortion_parameters", "map with k1 k2 p1 p2");
+    const YAML::Node p = require(f, f.root, "projection_parameters", "map with gamma1 gamma2 u0 v0");
+    cam.xi = getDouble(f, m, "xi", "mirror_parameters");
+    if (!(cam.xi >= 0.0 && cam.xi <= 10.0))
+      throw InputError(path, lineOf(m["xi"]),
+                       "expected the mirror parameter xi in [0, 10], got " + std::to_string(cam.xi));
+    const char* dk[] = {"k1", "k2", "p1", "p2"};
+    for (int i = 0; i < 4; ++i) cam.dist[i] = getDouble(f, d, dk[i], "distortion_parameters");
+    cam.fx = getDouble(f, p, "gamma1", "projection_parameters");
+    cam.fy = getDouble(f, p, "gamma2", "projection_parameters");
+    cam.cx = getDouble(f, p, "u0", "projection_parameters");
+    cam.cy = getDouble(f, p, "v0", "projection_parameters");
   } else {
     throw InputError(path, lineOf(model_node),
-                     "unknown camera model '" + model + "' (expected PINHOLE or KANNALA_BRANDT)");
+                     "unknown camera model '" + model + "' (expected PINHOLE, KANNALA_BRANDT or MEI)");
   }
-  // Plausible for a real camera: focal lengths up to 100 image widths (a 0.6 degree view),
-  // the principal point inside the image.
-  const double max_f = 100.0 * std::max(cam.width, cam.height);
-  if (!(cam.fx > 0 && cam.fy > 0 && cam.fx <= max_f && cam.fy <= max_f))
-    throw InputError(path, "expected focal lengths in (0, " + std::to_string(static_cast<int>(max_f)) + "] px for a " +
-                               std::to_string(cam.width) + "x" + std::to_string(cam.height) + " image, got " +
-                               std::to_string(cam.fx) + ", " + std::to_string(cam.fy));
-  if (!(cam.cx >= 0 && cam.cx <= cam.width && cam.cy >= 0 && cam.cy <= cam.height))
-    throw InputError(path, "expected the principal point inside the " + std::to_string(cam.width) + "x" +
-                               std::to_string(cam.height) + " image, got (" + std::to_string(cam.cx) + ", " +
-                               std::to_string(cam.cy) + ")");
+  checkIntrinsics(path, cam);
   return cam;
 }
 

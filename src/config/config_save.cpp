@@ -142,22 +142,29 @@ std::string keyTable() {
 
 void saveCameraFile(const camera::CameraParams& k, const std::string& path) {
   std::string s = "%YAML:1.0\n---\n";
-  const bool pinhole = k.type == camera::ModelType::kPinhole;
-  s += std::string("model_type: ") + (pinhole ? "PINHOLE" : "KANNALA_BRANDT") + "\n";
+  s += std::string("model_type: ") + camera::toString(k.type) + "\n";
   s += "camera_name: " + (k.name.empty() ? std::string("camera") : k.name) + "\n";
   s += "image_width: " + std::to_string(k.width) + "\nimage_height: " + std::to_string(k.height) + "\n";
   const char* dk[] = {"k1", "k2", "p1", "p2"};
   const char* kb[] = {"k2", "k3", "k4", "k5"};
-  if (pinhole) {
-    s += "distortion_parameters:\n";
-    for (int i = 0; i < 4; ++i) s += std::string("   ") + dk[i] + ": " + number(k.dist[i]) + "\n";
-    s += "projection_parameters:\n   fx: " + number(k.fx) + "\n   fy: " + number(k.fy) + "\n   cx: " + number(k.cx) +
-         "\n   cy: " + number(k.cy) + "\n";
-  } else {
-    s += "projection_parameters:\n";
-    for (int i = 0; i < 4; ++i) s += std::string("   ") + kb[i] + ": " + number(k.dist[i]) + "\n";
-    s += "   mu: " + number(k.fx) + "\n   mv: " + number(k.fy) + "\n   u0: " + number(k.cx) +
-         "\n   v0: " + number(k.cy) + "\n";
+  switch (k.type) {
+    case camera::ModelType::kPinhole:
+    case camera::ModelType::kMei:
+      if (k.type == camera::ModelType::kMei) s += "mirror_parameters:\n   xi: " + number(k.xi) + "\n";
+      s += "distortion_parameters:\n";
+      for (int i = 0; i < 4; ++i) s += std::string("   ") + dk[i] + ": " + number(k.dist[i]) + "\n";
+      s += k.type == camera::ModelType::kMei
+               ? "projection_parameters:\n   gamma1: " + number(k.fx) + "\n   gamma2: " + number(k.fy)
+               : "projection_parameters:\n   fx: " + number(k.fx) + "\n   fy: " + number(k.fy);
+      s += std::string(k.type == camera::ModelType::kMei ? "\n   u0: " : "\n   cx: ") + number(k.cx) +
+           (k.type == camera::ModelType::kMei ? "\n   v0: " : "\n   cy: ") + number(k.cy) + "\n";
+      break;
+    case camera::ModelType::kKannalaBrandt:
+      s += "projection_parameters:\n";
+      for (int i = 0; i < 4; ++i) s += std::string("   ") + kb[i] + ": " + number(k.dist[i]) + "\n";
+      s += "   mu: " + number(k.fx) + "\n   mv: " + number(k.fy) + "\n   u0: " + number(k.cx) +
+           "\n   v0: " + number(k.cy) + "\n";
+      break;
   }
   writeFile(path, s);
 }

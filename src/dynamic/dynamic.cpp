@@ -212,8 +212,8 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
   const double sigma = credibility(*ctx.prior);
   stats_.credibility = sigma;
   const auto& p = ctx.camera->params();
-  const bool fisheye = p.type == camera::ModelType::kKannalaBrandt;
-  const double fx = fisheye ? ctx.camera->focal() : p.fx, fy = fisheye ? ctx.camera->focal() : p.fy;
+  const auto f_px = camera::pixelsPerNormalized(p);
+  const double fx = f_px[0], fy = f_px[1];
   const Matrix3d R = ctx.prior->q_prev_cur.toRotationMatrix();
   std::vector<std::size_t> scored, scored_items;  // positions in `tracked` judged by d_s; their items
   std::vector<double> raw, ds;
