@@ -147,7 +147,8 @@ export IDY WORK PEERS PEERS_ROOT VINS
 export -f sim_run vins_run one_run
 # One queue for both programs, JOBS at a time (the longest, idyvins', first).
 {
-  for j in "${idy_jobs[@]}"; do set -- $j; echo "idy $1 $2 ${MODE_OF[$1]:-baseline} ${*:3}"; done
+  # no trailing blank: xargs -L continues such a line onto the next
+  for j in "${idy_jobs[@]}"; do set -- $j; echo "idy $1 $2 ${MODE_OF[$1]:-baseline}${3:+ ${*:3}}"; done
   for j in "${vins_jobs[@]}"; do echo "vins $j"; done
 } | xargs -P "$JOBS" -L 1 bash -c 'one_run "$0" "$@"'
 

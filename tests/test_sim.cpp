@@ -443,9 +443,12 @@ double rayBox(const Vector3d& o, const Vector3d& d, const Vector3d& lo, const Ve
   return t0 <= t1 ? t0 : -1;
 }
 
-TEST(SimRenderer, MaskMatchesTheProjectedVehicleBox) {
+/// The vehicle's rendered mask against the rays that hit its box, through the rig's lens.
+void expectMaskMatchesTheProjectedVehicleBox(Lens lens) {
   const TextureBank tex(1, 1, 8);
-  const Config rig = rigConfig(SimOptions{});
+  SimOptions o;
+  o.lens = lens;
+  const Config rig = rigConfig(o);
   const Renderer renderer(rig.cams[0], tex);
   World w;
   Quad ground;
@@ -489,6 +492,31 @@ TEST(SimRenderer, MaskMatchesTheProjectedVehicleBox) {
   ASSERT_GT(expected, 2000);
   EXPECT_LE(mismatched, expected / 1000);  // boundary pixels only
   EXPECT_EQ(cv::countNonZero(r.mask), cv::countNonZero(r.mask == 7));
+}
+
+TEST(SimRenderer, MaskMatchesTheProjectedVehicleBox) { expectMaskMatchesTheProjectedVehicleBox(Lens::kPinhole); }
+
+TEST(SimRenderer, FisheyeMasksMatchTheProjectedVehicleBoxThroughTheirLens) {
+  expectMaskMatchesTheProjectedVehicleBox(Lens::kKannalaBrandt);
+  expectMaskMatchesTheProjectedVehicleBox(Lens::kMei);
+}
+
+TEST(SimRenderer, FisheyeLensesSee150DegreesAcrossTheDiagonal) {
+  for (const Lens lens : {Lens::kKannalaBrandt, Lens::kMei}) {
+    SimOptions o;
+    o.lens = lens;
+    const Config rig = rigConfig(o);
+    for (int i = 0; i < 2; ++i) {
+      const auto cam = camera::makeCamera(rig.cams[i]);
+      EXPECT_EQ(rig.cams[i].type, lens == Lens::kMei ? camera::ModelType::kMei : camera::ModelType::kKannalaBrandt);
+      // The image corner's ray is 75 degrees off the axis (the principal point is the centre).
+      Vector2d xy;
+      ASSERT_TRUE(cam->liftToNormalized(
+          Vector2d(rig.cams[i].cx, rig.cams[i].cy) + 0.5 * Vector2d(752, 480).norm() * Vector2d(1, 0), xy));
+      EXPECT_NEAR(std::atan(xy.norm()) * 180 / M_PI, 0.5 * kFisheyeDiagonalFovDeg, 1e-6);
+      EXPECT_NE(rig.cam_paths[i].find(toString(lens)), std::string::npos);
+    }
+  }
 }
 
 constexpr std::uint64_t kTodayLeftHash = 8175068048370894342ull, kTodayRightHash = 14836506294586362930ull;

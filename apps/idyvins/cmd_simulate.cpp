@@ -26,6 +26,7 @@ struct SimulateArgs {
   std::string format = "euroc", compression = "none", viode_tables = IDYVINS_VIODE_TABLES;
   std::string realism = "none";
   std::string family = "standard";
+  std::string lens = "pinhole";
 };
 
 /// VIODE's file name for a traffic level (0_none .. 3_high).
@@ -91,6 +92,8 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
   sim::SimOptions o;
   if (!sim::parseFamily(a.family, o.family))
     throw CLI::ValidationError("--family", "expected standard|validation, got '" + a.family + "'");
+  if (!sim::parseLens(a.lens, o.lens))
+    throw CLI::ValidationError("--lens", "expected pinhole|kb|mei, got '" + a.lens + "'");
   o.scene.scene = scene;
   if (!sim::parseLevel(level, o.scene.level))
     throw CLI::ValidationError("--level", "expected none|low|mid|high, got '" + level + "'");
@@ -222,6 +225,11 @@ void registerSimulate(CLI::App& app, int& exit_code) {
                   "mount errors, VINS-Fusion's EuRoC IMU noise keys in the config, other materials (bricks,\n"
                   "fractal asphalt and concrete, plainer vehicles) and a handheld (walking) trajectory")
       ->check(CLI::IsMember({"standard", "validation"}));
+  cmd->add_option("--lens", a->lens,
+                  "pinhole (default): the family's lens; kb, mei: a full-frame fisheye of 150 deg across the\n"
+                  "diagonal in both cameras (Kannala-Brandt, or MEI with xi 1.2), the same scene, trajectory\n"
+                  "and mounts, so a run compares with the pinhole render of the same seed")
+      ->check(CLI::IsMember({"pinhole", "kb", "mei"}));
   cmd->add_option("--td-ms", a->td_ms,
                   "camera-IMU time offset of the written data (ms): image stamps are the capture times on the\n"
                   "IMU clock minus this, so a config's td of this value is right (VINS-Fusion's convention: image\n"

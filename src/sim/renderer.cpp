@@ -34,9 +34,13 @@ Renderer::Renderer(const camera::CameraParams& params, const TextureBank& textur
   for (int v = 0; v < params.height; ++v)
     for (int u = 0; u < params.width; ++u) {
       Vector2d xy;
-      if (!model_->liftToNormalized(Vector2d(u, v), xy))
-        throw std::runtime_error("renderer: camera model cannot lift every pixel");
+      if (!model_->liftToNormalized(Vector2d(u, v), xy)) {
+        if (params.type == camera::ModelType::kPinhole)
+          throw std::runtime_error("renderer: camera model cannot lift every pixel");
+        xy.setConstant(std::numeric_limits<double>::quiet_NaN());  // behind the lens: dark
+      }
       rays_[static_cast<std::size_t>(v) * params.width + u] = xy.cast<float>();
+      if (params.type != camera::ModelType::kPinhole) continue;  // pixelBox projects the edges
       const Vector2d pin(params.fx * xy.x() + params.cx, params.fy * xy.y() + params.cy);
       max_distortion_px_ = std::max(max_distortion_px_, (pin - Vector2d(u, v)).norm());
     }
@@ -62,6 +66,41 @@ RenderOutput Renderer::render(const std::vector<Quad>& quads, const Eigen::Isome
   return out;
 }
 
+void Renderer::pixelBox(const std::vector<Vector3d>& poly, double margin, int& u0, int& u1, int& v0, int& v1) const {
+  const int W = params_.width, H = params_.height;
+  double xmin = 1e30, xmax = -1e30, ymin = 1e30, ymax = -1e30;
+  if (params_.type == camera::ModelType::kPinhole) {  // the normalized box, widened by the distortion
+    for (const auto& p : poly) {
+      xmin = std::min(xmin, p.x() / p.z());
+      xmax = std::max(xmax, p.x() / p.z());
+      ymin = std::min(ymin, p.y() / p.z());
+      ymax = std::max(ymax, p.y() / p.z());
+    }
+    xmin = params_.fx * xmin + params_.cx - margin, xmax = params_.fx * xmax + params_.cx + margin;
+    ymin = params_.fy * ymin + params_.cy - margin, ymax = params_.fy * ymax + params_.cy + margin;
+  } else {  // a wide lens bends the edges: the box of the projected edges, finely sampled
+    constexpr int kSamples = 64;
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+      const Vector3d& a = poly[i];
+      const Vector3d& b = poly[(i + 1) % poly.size()];
+      for (int k = 0; k < kSamples; ++k) {
+        Vector2d uv;
+        if (!model_->project(a + (b - a) * (static_cast<double>(k) / kSamples), uv)) {
+          u0 = v0 = 0, u1 = W - 1, v1 = H - 1;  // beyond the lens model: every pixel is tried
+          return;
+        }
+        xmin = std::min(xmin, uv.x()), xmax = std::max(xmax, uv.x());
+        ymin = std::min(ymin, uv.y()), ymax = std::max(ymax, uv.y());
+      }
+    }
+    xmin -= 4.0, xmax += 4.0, ymin -= 4.0, ymax += 4.0;  // the curve between samples
+  }
+  u0 = std::max(0, static_cast<int>(std::floor(xmin)));
+  u1 = std::min(W - 1, static_cast<int>(std::ceil(xmax)));
+  v0 = std::max(0, static_cast<int>(std::floor(ymin)));
+  v1 = std::min(H - 1, static_cast<int>(std::ceil(ymax)));
+}
+
 Renderer::Hits Renderer::rasterize(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c) const {
   const int W = params_.width, H = params_.height;
   const std::size_t N = static_cast<std::size_t>(W) * H;
@@ -71,7 +110,7 @@ Renderer::Hits Renderer::rasterize(const std::vector<Quad>& quads, const Eigen::
   std::vector<int>& hit = h.quad;
   std::vector<float>&hs = h.s, &ht = h.t, &hfoot = h.footprint;
   const Eigen::Isometry3d T_c_w = T_w_c.inverse();
-  const double f = 0.5 * (params_.fx + params_.fy);
+  const double f = model_->focal();
   const double margin = max_distortion_px_ + 2.0;
 
   for (int qi = 0; qi < static_cast<int>(quads.size()); ++qi) {
@@ -83,17 +122,8 @@ Renderer::Hits Renderer::rasterize(const std::vector<Quad>& quads, const Eigen::
     if (!q.two_sided && n_dot_o >= 0) continue;  // back face (camera behind the plane)
     const std::vector<Vector3d> poly = clipNear({o, o + u * q.width, o + u * q.width + v * q.height, o + v * q.height});
     if (poly.size() < 3) continue;
-    double xmin = 1e30, xmax = -1e30, ymin = 1e30, ymax = -1e30;
-    for (const auto& p : poly) {
-      xmin = std::min(xmin, p.x() / p.z());
-      xmax = std::max(xmax, p.x() / p.z());
-      ymin = std::min(ymin, p.y() / p.z());
-      ymax = std::max(ymax, p.y() / p.z());
-    }
-    const int u0 = std::max(0, static_cast<int>(std::floor(params_.fx * xmin + params_.cx - margin)));
-    const int u1 = std::min(W - 1, static_cast<int>(std::ceil(params_.fx * xmax + params_.cx + margin)));
-    const int v0 = std::max(0, static_cast<int>(std::floor(params_.fy * ymin + params_.cy - margin)));
-    const int v1 = std::min(H - 1, static_cast<int>(std::ceil(params_.fy * ymax + params_.cy + margin)));
+    int u0, u1, v0, v1;
+    pixelBox(poly, margin, u0, u1, v0, v1);
     if (u0 > u1 || v0 > v1) continue;
     for (int py = v0; py <= v1; ++py) {
       for (int px = u0; px <= u1; ++px) {
@@ -101,8 +131,8 @@ Renderer::Hits Renderer::rasterize(const std::vector<Quad>& quads, const Eigen::
         const Eigen::Vector2f& r = rays_[idx];
         const Vector3d d(r.x(), r.y(), 1.0);
         const double n_dot_d = n.dot(d);
-        if (std::abs(n_dot_d) < 1e-12) continue;
-        const double z = n_dot_o / n_dot_d;  // d.z = 1, so the ray parameter is the depth
+        if (std::abs(n_dot_d) < 1e-12 || !r.allFinite()) continue;  // no ray: outside the lens
+        const double z = n_dot_o / n_dot_d;                         // d.z = 1, so the ray parameter is the depth
         if (z < kNear || z >= zbuf[idx]) continue;
         const Vector3d rel = d * z - o;
         const double s = rel.dot(u), t = rel.dot(v);

@@ -44,6 +44,9 @@ class Renderer {
   };
   /// Z-buffer pass: every quad rasterized through the per-pixel rays.
   Hits rasterize(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c) const;
+  /// The pixel box [u0, u1] x [v0, v1] (clipped to the image) that holds the image of a
+  /// polygon in front of the camera; `margin` widens a pinhole's normalized box.
+  void pixelBox(const std::vector<Eigen::Vector3d>& poly, double margin, int& u0, int& u1, int& v0, int& v1) const;
   /// Texture, albedo and contrast at each hit (sky or dark background elsewhere).
   RenderOutput shade(const std::vector<Quad>& quads, const Hits& hits, bool sky) const;
   camera::CameraParams params_;

@@ -47,6 +47,30 @@ bool parseFamily(const std::string& text, Family& family) {
 
 const char* toString(Family family) { return family == Family::kValidation ? "validation" : "standard"; }
 
+bool parseLens(const std::string& text, Lens& lens) {
+  if (text == "pinhole")
+    lens = Lens::kPinhole;
+  else if (text == "kb")
+    lens = Lens::kKannalaBrandt;
+  else if (text == "mei")
+    lens = Lens::kMei;
+  else
+    return false;
+  return true;
+}
+
+const char* toString(Lens lens) {
+  switch (lens) {
+    case Lens::kKannalaBrandt:
+      return "kb";
+    case Lens::kMei:
+      return "mei";
+    case Lens::kPinhole:
+      break;
+  }
+  return "pinhole";
+}
+
 namespace {
 
 /// The validation family's rig: EuRoC's intrinsics (each camera its own, no distortion),
@@ -74,6 +98,25 @@ void validationRig(Config& c) {
   c.imu.noise.gyr_n = 0.01;
   c.imu.noise.acc_w = 0.001;
   c.imu.noise.gyr_w = 0.0001;
+}
+
+/// The fisheye lens in place of the pinhole: the same principal point, the focal scale chosen
+/// so that the half diagonal images kFisheyeDiagonalFovDeg / 2 off the axis.
+void fisheyeLens(camera::CameraParams& p, Lens lens) {
+  const double half_diagonal = 0.5 * std::hypot(p.width, p.height);
+  const double theta = 0.5 * kFisheyeDiagonalFovDeg * M_PI / 180.0;
+  p.type = lens == Lens::kMei ? camera::ModelType::kMei : camera::ModelType::kKannalaBrandt;
+  if (lens == Lens::kMei) {
+    p.xi = 1.2;
+    p.dist = {-0.02, 0.004, 0.0, 0.0};
+  } else {
+    p.dist = {0.012, -0.003, 0.0, 0.0};  // k2 k3
+  }
+  p.fx = p.fy = 1.0;
+  const auto unit = camera::makeCamera(p);
+  Eigen::Vector2d uv;
+  unit->project(Eigen::Vector3d(std::sin(theta), 0.0, std::cos(theta)), uv);
+  p.fx = p.fy = half_diagonal / (uv.x() - p.cx);
 }
 
 }  // namespace
@@ -111,6 +154,11 @@ Config rigConfig(const SimOptions& options) {
   c.imu.noise.gyr_w = m.gyro_random_walk * std::sqrt(rate);
   c.imu.noise.g_norm = options.g_norm;
   if (options.family == Family::kValidation) validationRig(c);
+  if (options.lens != Lens::kPinhole)
+    for (int i = 0; i < 2; ++i) {
+      fisheyeLens(c.cams[i], options.lens);
+      c.cam_paths[i] = "cam" + std::to_string(i) + "_" + toString(options.lens) + ".yaml";
+    }
   // A real camera's config: right matches refined gain- and bias-invariantly (KLT's
   // disparity is biased by brightness differences a global gain leaves, see TrackerParams).
   c.tracker.stereo_refine = options.realism.enabled ? 1 : 0;
@@ -181,10 +229,13 @@ void writeSensorYamls(const fs::path& mav0, const Config& c, const SimOptions& o
     char buf[2048];
     std::snprintf(buf, sizeof(buf),
                   "%%YAML:1.0\nsensor_type: camera\ncomment: idyvins simulator cam%d\nT_BS:\n%s"
-                  "rate_hz: %g\nresolution: [%d, %d]\ncamera_model: pinhole\nintrinsics: [%g, %g, %g, %g]\n"
-                  "distortion_model: radial-tangential\ndistortion_coefficients: [%g, %g, %g, %g]\n",
-                  i, matrixYaml(c.T_b_c[i].matrix(), "  ").c_str(), o.camera_rate_hz, p.width, p.height, p.fx, p.fy,
-                  p.cx, p.cy, p.dist[0], p.dist[1], p.dist[2], p.dist[3]);
+                  "rate_hz: %g\nresolution: [%d, %d]\ncamera_model: %s\nintrinsics: [%s%g, %g, %g, %g]\n"
+                  "distortion_model: %s\ndistortion_coefficients: [%g, %g, %g, %g]\n",
+                  i, matrixYaml(c.T_b_c[i].matrix(), "  ").c_str(), o.camera_rate_hz, p.width, p.height,
+                  p.type == camera::ModelType::kMei ? "omni" : "pinhole",  // Kalibr's names
+                  p.type == camera::ModelType::kMei ? (std::to_string(p.xi) + ", ").c_str() : "", p.fx, p.fy, p.cx,
+                  p.cy, p.type == camera::ModelType::kKannalaBrandt ? "equidistant" : "radial-tangential", p.dist[0],
+                  p.dist[1], p.dist[2], p.dist[3]);
     writeText(mav0 / ("cam" + std::to_string(i)) / "sensor.yaml", buf);
   }
   char buf[1024];
@@ -243,6 +294,7 @@ nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult
           {"route", toString(o.scene.route)},
           {"parked_vehicles", parked},
           {"family", toString(o.family)},
+          {"lens", toString(o.lens)},
           {"opening_vehicle", o.scene.opening_vehicle},
           {"duration_s", o.duration_s},
           {"t0_ns", o.t0_ns},

@@ -36,9 +36,20 @@ enum class Family { kStandard, kValidation };
 bool parseFamily(const std::string& text, Family& family);
 const char* toString(Family family);
 
+/// The cameras' lens: the family's pinhole, or a full-frame fisheye of 150° across the
+/// image diagonal (both cameras, the family's principal points, the same mounts):
+/// Kannala–Brandt (equidistant with small k2 k3) or MEI (ξ 1.2, small k1 k2).
+enum class Lens { kPinhole, kKannalaBrandt, kMei };
+/// "pinhole", "kb" or "mei".
+bool parseLens(const std::string& text, Lens& lens);
+const char* toString(Lens lens);
+/// The diagonal field of view of the fisheye lenses (degrees).
+constexpr double kFisheyeDiagonalFovDeg = 150.0;
+
 /// Everything `simulate` needs.
 struct SimOptions {
   Family family = Family::kStandard;
+  Lens lens = Lens::kPinhole;
   SceneOptions scene;
   double duration_s = 60.0;
   double camera_rate_hz = 20.0;
