@@ -12,8 +12,8 @@
 #              td given, and estimate_td 1 from td 0 (VINS-Fusion: VINS_OFFSETS, default -50 30 50).
 #   IMU gap:   0.5 s and 2 s without IMU samples from 8 s on (bridge_imu_gaps 1).
 #   no IMU:    imu: 0 (stereo alone).
-#   traffic:   mid and high traffic, baseline and idy, with estimate_extrinsic 1 and estimate_td 1
-#              from td 0 (exact calibration), and with imu: 0 (idy's constant-velocity prior).
+#   traffic:   mid and high traffic, baseline and idy, as rendered, with estimate_extrinsic 1 and
+#              estimate_td 1 from td 0 (exact calibration), and with imu: 0 (idy's constant-velocity prior).
 # Usage: bench/calibration.sh IDYVINS WORK [PEERS_ROOT]   (JOBS runs at a time, default 2, both
 # programs in one queue;
 # finished runs are kept, so a second call only prints the tables)
@@ -31,6 +31,7 @@ SEQS=("standard city --seed 1" "standard city --seed 1 --realism euroc" "validat
       "validation city --seed 2 --realism euroc")
 OFFSETS=(-50 -20 10 30 50)
 VINS_OFFSETS=${VINS_OFFSETS:-"-50 30 50"}  # VINS-Fusion's offset runs (each costs it as much as idyvins)
+# VINS_SEQS: the sequence names VINS-Fusion runs on (default every one)
 CFG=config/sim_stereo_imu_config.yaml
 name() { echo "$1" | sed -e 's/--seed /s/; s/ --realism euroc/_realism/; s/ /_/g'; }
 
@@ -81,16 +82,17 @@ for s in "${SEQS[@]}"; do
   R=$WORK/runs/$n
   idy_jobs+=("$R.exact $S" "$R.exact.est1 $S estimate_extrinsic=1" "$R.id.est2 $S.id estimate_extrinsic=2"
              "$R.noimu $S imu=0" "$R.gap0.5 $S.gap0.5" "$R.gap2 $S.gap2")
-  vins_jobs+=("$n.exact $S" "$n.id.est2 $S.id estimate_extrinsic=2" "$n.noimu $S imu=0" "$n.gap0.5 $S.gap0.5"
+  vins_here=0; case " ${VINS_SEQS:-$n} " in *" $n "*) vins_here=1 ;; esac  # VINS-Fusion on VINS_SEQS (default all)
+  [ $vins_here = 1 ] && vins_jobs+=("$n.exact $S" "$n.id.est2 $S.id estimate_extrinsic=2" "$n.noimu $S imu=0" "$n.gap0.5 $S.gap0.5"
               "$n.gap2 $S.gap2")
   for e in 1 3; do
     idy_jobs+=("$R.ex$e.est0 $S.ex$e" "$R.ex$e.est1 $S.ex$e estimate_extrinsic=1")
-    vins_jobs+=("$n.ex$e.est0 $S.ex$e estimate_extrinsic=0" "$n.ex$e.est1 $S.ex$e estimate_extrinsic=1")
+    [ $vins_here = 1 ] && vins_jobs+=("$n.ex$e.est0 $S.ex$e estimate_extrinsic=0" "$n.ex$e.est1 $S.ex$e estimate_extrinsic=1")
   done
   for m in "${OFFSETS[@]}"; do
     td=$(awk -v m="$m" 'BEGIN { printf "%.3f", m / 1000 }')
     idy_jobs+=("$R.td$m.given $S.td$m td=$td" "$R.td$m.est $S.td$m estimate_td=1 td=0")
-    case " $VINS_OFFSETS " in *" $m "*) vins_jobs+=("$n.td$m.given $S.td$m td=$td" "$n.td$m.est $S.td$m estimate_td=1 td=0") ;; esac
+    case " $VINS_OFFSETS " in *" $m "*) [ $vins_here = 1 ] && vins_jobs+=("$n.td$m.given $S.td$m td=$td" "$n.td$m.est $S.td$m estimate_td=1 td=0") ;; esac
   done
 done
 
@@ -104,8 +106,8 @@ for s in "standard city --seed 1" "validation city --seed 2"; do
     [ -f "$S/meta.json" ] || "$IDY" simulate --family "$1" --scene "$2" --level $level "${@:3}" --duration 20 \
       --out "$S" > /dev/null 2>&1
     for mode in baseline idy; do
-      idy_jobs+=("$R.$mode.est $S estimate_extrinsic=1 estimate_td=1 td=0" "$R.$mode.noimu $S imu=0")
-      MODE_OF[$R.$mode.est]=$mode; MODE_OF[$R.$mode.noimu]=$mode
+      idy_jobs+=("$R.$mode.plain $S" "$R.$mode.est $S estimate_extrinsic=1 estimate_td=1 td=0" "$R.$mode.noimu $S imu=0")
+      MODE_OF[$R.$mode.plain]=$mode; MODE_OF[$R.$mode.est]=$mode; MODE_OF[$R.$mode.noimu]=$mode
     done
     TRAFFIC+=("$n")
   done
