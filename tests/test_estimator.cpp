@@ -505,6 +505,51 @@ TEST(Initializer, RotationAlignmentRecoversTheCameraImuTimeOffset) {
   EXPECT_FALSE(alignRotationTimes(q, t, imu, 0.03).has_value());
 }
 
+TEST(Initializer, RotationAlignmentOverTwoSecondsFindsFiftyMillisecondsAndKnowsWhenItCannot) {
+  // The initialization's search (estimate_td): ±60 ms over 2 s of poses at 20 Hz.
+  sim::SimOptions o = options("city", 3.5);
+  o.imu.scale = 0.0;
+  const sim::Trajectory traj("city", 2, 9.81, sim::TrajectoryStyle::kHandheld);
+  std::vector<ImuSample> imu;
+  std::vector<GroundTruthState> gt;
+  sim::synthesizeImu(traj, o, imu, gt);
+  for (auto& s : imu) s.gyr_b += Vector3d(0.01, -0.02, 0.015);
+  const auto poses = [&](double td, std::vector<Eigen::Quaterniond>& q, std::vector<TimeNs>& t) {
+    q.clear();
+    t.clear();
+    for (int k = 0; k <= 40; ++k) {
+      const double t_capture = 0.5 + 0.05 * k;
+      q.push_back(traj.at(t_capture).q_w_b);
+      t.push_back(imu.front().t_ns + static_cast<TimeNs>(std::llround((t_capture - td) * 1e9)));
+    }
+  };
+  std::vector<Eigen::Quaterniond> q;
+  std::vector<TimeNs> t;
+  for (double td : {-0.05, 0.031, 0.05}) {
+    poses(td, q, t);
+    double contrast = 0;
+    const std::optional<double> found = alignRotationTimes(q, t, imu, 0.06, 0.001, &contrast);
+    ASSERT_TRUE(found.has_value()) << td;
+    EXPECT_NEAR(*found, td, 2e-4) << td;
+    EXPECT_GT((contrast - 1.0) * static_cast<double>(q.size() - 4), 10 * kTdSignificance)
+        << "a walk's rotations tell the offset";
+  }
+  // At rest (one orientation, the gyroscope reading its bias and noise): nothing tells the
+  // shift, and the contrast says so.
+  std::vector<ImuSample> still = imu;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  for (auto& s : still) s.gyr_b = Vector3d(0.01, -0.02, 0.015) + Vector3d(noise(rng), noise(rng), noise(rng));
+  poses(0.02, q, t);
+  for (auto& qk : q) qk = q.front();
+  double contrast = 0;
+  const std::optional<double> found = alignRotationTimes(q, t, still, 0.06, 0.001, &contrast);
+  if (found) {
+    EXPECT_LT((contrast - 1.0) * static_cast<double>(q.size() - 4), kTdSignificance)
+        << "the estimator keeps the config's offset";
+  }
+}
+
 TEST(FeatureManager, TriangulationAndReanchoring) {
   Rig rig;
   rig.T_b_c0.q_b_c = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Vector3d::UnitY()));

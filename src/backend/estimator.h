@@ -33,9 +33,16 @@ constexpr double kMinSpeedForTd = 0.2;
 /// first start"); an earlier failure restarts the biases as a first start does.
 constexpr int kSettledFrames = 2 * kWindowSize;
 /// At initialization the offset is searched within ± this (s) of the config's (estimate_td).
-/// ±60 ms with up to three restarts was measured and not kept: on the street renders the
-/// rotations' alignment then found offsets 50 ms off (docs/results.md, A rig off the bench).
-constexpr double kTdInitSearchS = 0.03;
+constexpr double kTdInitSearchS = 0.06;
+/// estimate_td: the initialization collects at least this long (s) of PnP poses before it
+/// searches the offset over them, and goes on collecting, up to kTdSearchMaxSpanS, while the
+/// search does not tell it (alignTimeOffset): a significance (alignRotationTimes' contrast as an
+/// F statistic) below kTdSignificance, or a mean turn rate below kTdSearchMinRate (rad/s). Still
+/// not telling then, the window starts with the config's offset and estimates it.
+constexpr double kTdSearchSpanS = 2.0;
+constexpr double kTdSearchMaxSpanS = 5.0;
+constexpr double kTdSignificance = 10.0;
+constexpr double kTdSearchMinRate = 0.1;
 /// A rotation-aligned offset this far (s) from the current one restarts the initialization.
 constexpr double kTdInitRestartS = 0.001;
 
@@ -78,8 +85,9 @@ class Estimator {
   static constexpr int kStereoInitLandmarks = 20;
   bool pnp(int frame);
   bool alignAndStart();
-  /// estimate_td: the offset from the initialization window's rotations (alignRotationTimes);
-  /// true when it moved by kTdInitRestartS or more and the window restarted.
+  /// estimate_td: the offset from the rotations of the initialization's poses over
+  /// kTdSearchSpanS or more (alignRotationTimes); true while it collects them (the window
+  /// slid) and when the offset moved by kTdInitRestartS or more and the window restarted.
   bool alignTimeOffset(FrameResult& r);
   /// One candidate observation's information scale 1/m_j (DESIGN §4.5).
   struct CandidateWeight {

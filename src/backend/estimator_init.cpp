@@ -77,21 +77,50 @@ bool Estimator::initStep(FrameResult& r) {
 }
 
 bool Estimator::alignTimeOffset(FrameResult& r) {
+  // Collect the PnP poses while the window slides, then search the offset over all of them:
+  // over one window (0.5 s) the streets' slow turns left the search 10-30 ms off, over 2 s
+  // within 2.4 ms (docs/results.md, "A time offset from any start").
+  if (seg_.td_times.empty())
+    for (int i = 0; i < w_.count; ++i) {
+      seg_.td_poses.push_back(w_.frames[i].T_w_b());
+      seg_.td_times.push_back(w_.frames[i].t_ns);
+    }
+  seg_.td_poses.push_back(w_.frames[w_.count].T_w_b());
+  seg_.td_times.push_back(w_.frames[w_.count].t_ns);
+  const double span_s = 1e-9 * static_cast<double>(seg_.td_times.back() - seg_.td_times.front());
+  const auto collecting = [&](const std::string& why) {
+    r.status = "initializing: " + why + " (" + std::to_string(std::lround(10 * span_s) / 10.0).substr(0, 3) +
+               " s of poses), searching the time offset";
+    slide(true);
+    return true;
+  };
+  if (span_s < kTdSearchSpanS) return collecting("collecting poses");
   std::vector<Quaterniond> q;
-  std::vector<TimeNs> t;
-  for (int i = 0; i <= w_.count; ++i) {
-    q.push_back(Quaterniond(w_.frames[i].T_w_b().linear()));
-    t.push_back(w_.frames[i].t_ns);
-  }
-  const std::optional<double> shift = alignRotationTimes(q, t, w_.imu, kTdInitSearchS);
-  if (!shift || std::abs(*shift) < kTdInitRestartS) return false;
+  for (const auto& T : seg_.td_poses) q.emplace_back(T.linear());
+  double contrast = 0;
+  const std::optional<double> shift = alignRotationTimes(q, seg_.td_times, w_.imu, kTdInitSearchS, 0.001, &contrast);
+  // How far kContrastShiftS off the best raises the rotations' misfit, in units of its noise
+  // (an F statistic of one parameter), and how fast the rig turns: a rig at rest or moving
+  // straight does not tell the offset, and a flat misfit's minimum is noise.
+  const double significance = (contrast - 1.0) * static_cast<double>(q.size() - 4);
+  double angle = 0;
+  for (std::size_t i = 1; i < q.size(); ++i) angle += q[i - 1].angularDistance(q[i]);
+  const bool tells = shift && significance >= kTdSignificance && angle / span_s >= kTdSearchMinRate;
+  if (!tells && span_s < kTdSearchMaxSpanS) return collecting("the rotations do not tell the offset yet");
+  seg_.td_poses.clear();
+  seg_.td_times.clear();
+  seg_.td_restarted = true;
+  // Not telling after kTdSearchMaxSpanS, or a shift below kTdInitRestartS: the window starts
+  // with the current offset and estimates it.
+  if (!tells || std::abs(*shift) < kTdInitRestartS) return false;
   // Moving the window's observations by the shift starts its solve far from where PnP put
   // the poses (a shift of all poses along the motion is nearly free for the IMU factors and
   // the solver crawls along it): start again with frames stamped with the new offset.
   w_.td_s += *shift;
-  seg_.td_restarted = true;
   resetWindow();
-  r.status = "initializing: time offset " + std::to_string(1e3 * w_.td_s) + " ms from the rotations, restarting";
+  r.status = "initializing: time offset " + std::to_string(1e3 * w_.td_s) + " ms from the rotations of " +
+             std::to_string(q.size()) + " frames (significance " + std::to_string(std::lround(significance)) +
+             "), restarting";
   return true;
 }
 

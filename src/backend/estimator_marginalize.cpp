@@ -26,7 +26,9 @@ void Estimator::slide(bool keyframe) {
     dropSecondNewest();
   // Keep the IMU samples still needed (from the oldest window frame on, and from the last
   // good state while a new segment must continue from it).
-  const TimeNs keep_from = seg_.reanchor_pending ? std::min(w_.frames[0].t_ns, seg_.last_good_t_ns) : w_.frames[0].t_ns;
+  TimeNs keep_from = seg_.reanchor_pending ? std::min(w_.frames[0].t_ns, seg_.last_good_t_ns) : w_.frames[0].t_ns;
+  if (!seg_.td_times.empty())  // the offset's search shifts its intervals by up to kTdInitSearchS
+    keep_from = std::min(keep_from, seg_.td_times.front() - static_cast<TimeNs>(2e9 * kTdInitSearchS));
   std::size_t first = 0;
   while (first + 1 < w_.imu.size() && w_.imu[first + 1].t_ns <= keep_from) ++first;
   if (first > 0) w_.imu.erase(w_.imu.begin(), w_.imu.begin() + static_cast<std::ptrdiff_t>(first));

@@ -18,6 +18,8 @@ void Estimator::resetWindow() {
   w_.prior.reset();
   seg_.bias_anchor.reset();
   seg_.frames = 0;
+  seg_.td_poses.clear();
+  seg_.td_times.clear();
   for (auto& f : w_.frames) f.pre.reset();
 }
 

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/so3.h"
 
@@ -69,7 +70,8 @@ Alignment alignVelocityGravity(const std::vector<Eigen::Isometry3d>& T,
 }
 
 std::optional<double> alignRotationTimes(const std::vector<Eigen::Quaterniond>& q, const std::vector<TimeNs>& t,
-                                         const std::vector<ImuSample>& imu, double max_shift_s, double step_s) {
+                                         const std::vector<ImuSample>& imu, double max_shift_s, double step_s,
+                                         double* contrast) {
   if (imu.empty() || q.size() != t.size() || step_s <= 0 || max_shift_s < 2 * step_s) return std::nullopt;
   const TimeNs max_ns = static_cast<TimeNs>(std::llround(max_shift_s * 1e9));
   std::vector<std::size_t> pairs;  // i: the pair (i − 1, i)
@@ -110,6 +112,14 @@ std::optional<double> alignRotationTimes(const std::vector<Eigen::Quaterniond>& 
   const double cm = c[best - 1], c0 = c[best], cp = c[best + 1];
   const double denom = cm - 2 * c0 + cp;
   const double frac = denom > 0 ? 0.5 * (cm - cp) / denom : 0.0;
+  if (contrast) {
+    const int k = std::max(1, static_cast<int>(std::lround(kContrastShiftS / step_s)));
+    // Only a side the range holds (the edge's cost says nothing of the shift's distance).
+    double near = std::numeric_limits<double>::infinity();
+    if (best - k >= 0) near = std::min(near, c[best - k]);
+    if (best + k <= 2 * n) near = std::min(near, c[best + k]);
+    *contrast = c0 > 0 ? near / c0 : std::numeric_limits<double>::infinity();
+  }
   return ((best - n) + std::clamp(frac, -0.5, 0.5)) * step_s;
 }
 

@@ -22,8 +22,16 @@ Eigen::Vector3d solveGyroBias(const std::vector<Eigen::Quaterniond>& q_w_b,
 /// the visual body orientations q_w_b at times t_ns (grid of step_s, refined by a parabola).
 /// Consecutive pairs whose shifted intervals the samples do not cover for every δ are left
 /// out. nullopt when fewer than 3 pairs remain or the best shift lies on the range's edge.
+/// contrast, when given: the least cost kContrastShiftS either side of the best shift (a side
+/// the range holds) over
+/// the best cost (near 1: the rotations do not tell the shift, e.g. at rest or turning at a
+/// constant rate).
 std::optional<double> alignRotationTimes(const std::vector<Eigen::Quaterniond>& q_w_b, const std::vector<TimeNs>& t_ns,
-                                         const std::vector<ImuSample>& imu, double max_shift_s, double step_s = 0.001);
+                                         const std::vector<ImuSample>& imu, double max_shift_s, double step_s = 0.001,
+                                         double* contrast = nullptr);
+
+/// The shift either side of the best at which alignRotationTimes measures its contrast (s).
+constexpr double kContrastShiftS = 0.03;
 
 /// Result of the linear alignment.
 struct Alignment {

@@ -57,6 +57,10 @@ struct SegmentState {
   /// first marginalization prior (EstimatorOptions::reset_bias_prior_acc, _gyr).
   std::optional<Eigen::Matrix<double, 6, 1>> bias_anchor;
   bool td_restarted = false;  ///< the initialization restarted once for the offset (since the last failure)
+  /// estimate_td: the initialization's PnP body poses and their times, collected over
+  /// kTdSearchSpanS while the window slides (slide() keeps WindowState::imu from the first).
+  std::vector<Eigen::Isometry3d> td_poses;
+  std::vector<TimeNs> td_times;
 };
 
 /// The left camera's mount while estimate_extrinsic refines it (backend/extrinsic.h); it outlives
