@@ -443,8 +443,20 @@ TEST(Config, BadValuesNameKeyAndLine) {
   expectError([&] { loadConfig(path); }, "expected the principal point inside the 64x48 image");
   path = writeConfig(dir, replace(kConfig, "num_of_cam: 1", "num_of_cam: 3"), kCamera);
   expectError([&] { loadConfig(path); }, "key 'num_of_cam': expected 1 or 2, got 3");
+  // A camera file whose size differs from the config's (VINS-Fusion's KITTI raw 09_30 and
+  // simulation configs): the config's size is used, with a warning; a principal point outside
+  // it is still refused.
   path = writeConfig(dir, replace(kConfig, "image_width: 64", "image_width: 640"), kCamera);
-  expectError([&] { loadConfig(path); }, "cam.yaml: image size 64x48 differs from the config's 640x48");
+  const Config wider = loadConfig(path);
+  EXPECT_EQ(wider.cams.at(0).width, 640);
+  EXPECT_EQ(wider.cams.at(0).height, 48);
+  ASSERT_FALSE(wider.warnings.empty());
+  EXPECT_NE(
+      wider.warnings.front().find("cam.yaml: image size 64x48 differs from the config's 640x48; the config's is used"),
+      std::string::npos)
+      << wider.warnings.front();
+  path = writeConfig(dir, replace(kConfig, "image_width: 64", "image_width: 20"), kCamera);
+  expectError([&] { loadConfig(path); }, "cam.yaml: expected the principal point inside the 20x48 image");
   path = writeConfig(dir, kConfig, replace(kCamera, "   fx: 50.0\n", ""));
   expectError([&] { loadConfig(path); }, "cam.yaml: missing required key 'fx'");
   path = writeConfig(dir, replace(kConfig, "imu: 1\n", "imu: [1\n"), kCamera);

@@ -161,9 +161,7 @@ auto refusingYamlErrors(const std::string& path, Read read) {
   }
 }
 
-}  // namespace
-
-namespace {
+std::string sizeText(int width, int height) { return std::to_string(width) + "x" + std::to_string(height); }
 
 /// Plausible for a real camera: focal lengths up to 100 image widths (a 0.6 degree view), the
 /// principal point inside the image. Throws InputError.
@@ -171,12 +169,11 @@ void checkIntrinsics(const std::string& path, const camera::CameraParams& cam) {
   const double max_f = 100.0 * std::max(cam.width, cam.height);
   if (!(cam.fx > 0 && cam.fy > 0 && cam.fx <= max_f && cam.fy <= max_f))
     throw InputError(path, "expected focal lengths in (0, " + std::to_string(static_cast<int>(max_f)) + "] px for a " +
-                               std::to_string(cam.width) + "x" + std::to_string(cam.height) + " image, got " +
-                               std::to_string(cam.fx) + ", " + std::to_string(cam.fy));
+                               sizeText(cam.width, cam.height) + " image, got " + std::to_string(cam.fx) + ", " +
+                               std::to_string(cam.fy));
   if (!(cam.cx >= 0 && cam.cx <= cam.width && cam.cy >= 0 && cam.cy <= cam.height))
-    throw InputError(path, "expected the principal point inside the " + std::to_string(cam.width) + "x" +
-                               std::to_string(cam.height) + " image, got (" + std::to_string(cam.cx) + ", " +
-                               std::to_string(cam.cy) + ")");
+    throw InputError(path, "expected the principal point inside the " + sizeText(cam.width, cam.height) +
+                               " image, got (" + std::to_string(cam.cx) + ", " + std::to_string(cam.cy) + ")");
 }
 
 }  // namespace
@@ -249,9 +246,12 @@ void readCameras(const YamlFile& f, const std::string& path, Config& c) {
     c.cam_paths.push_back(cam_path.string());
     camera::CameraParams cam = loadCameraFile(cam_path.string());
     if (cam.width != c.image_width || cam.height != c.image_height) {
-      throw InputError(cam_path.string(), "image size " + std::to_string(cam.width) + "x" + std::to_string(cam.height) +
-                                              " differs from the config's " + std::to_string(c.image_width) + "x" +
-                                              std::to_string(c.image_height));
+      c.warnings.push_back(cam_path.string() + ": image size " + sizeText(cam.width, cam.height) +
+                           " differs from the config's " + sizeText(c.image_width, c.image_height) +
+                           "; the config's is used (as VINS-Fusion does)");
+      cam.width = c.image_width;
+      cam.height = c.image_height;
+      checkIntrinsics(cam_path.string(), cam);
     }
     c.cams.push_back(cam);
     c.T_b_c.push_back(getTransform(f, "body_T_cam" + std::to_string(i)));
