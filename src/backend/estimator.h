@@ -13,6 +13,7 @@
 #include "backend/estimator_options.h"
 #include "backend/frame_result.h"
 #include "backend/landmark_factors.h"
+#include "backend/mono_init.h"
 #include "backend/window_state.h"
 #include "camera/rig.h"
 #include "core/measurements.h"
@@ -43,6 +44,8 @@ constexpr double kTdSearchSpanS = 2.0;
 constexpr double kTdSearchMaxSpanS = 5.0;
 constexpr double kTdSignificance = 10.0;
 constexpr double kTdSearchMinRate = 0.1;
+/// One camera: the alignment's scale is taken when its relative standard deviation is at most this.
+constexpr double kMonoMaxScaleSigma = 0.1;
 /// A rotation-aligned offset this far (s) from the current one restarts the initialization.
 constexpr double kTdInitRestartS = 0.001;
 
@@ -85,6 +88,15 @@ class Estimator {
   static constexpr int kStereoInitLandmarks = 20;
   bool pnp(int frame);
   bool alignAndStart();
+  /// The window's states from poses in the visual world, the alignment's gravity and
+  /// velocities and the gyroscope bias: gravity-aligned, biases as biasesFromLastGood says.
+  void startAligned(const std::vector<Eigen::Vector3d>& p_w_b, const std::vector<Eigen::Quaterniond>& q_w_b,
+                    const Alignment& a, const Eigen::Vector3d& bg);
+  /// One camera + IMU: once the window is full, its structure from motion (monocularStructure)
+  /// and the alignment with the IMU that gives it the metric scale; the window slides
+  /// (keyframes by parallax) until both succeed.
+  bool initStepMono(FrameResult& result);
+  bool alignMonoAndStart(const MonoStructure& sfm);
   /// estimate_td: the offset from the rotations of the initialization's poses over
   /// kTdSearchSpanS or more (alignRotationTimes); true while it collects them (the window
   /// slid) and when the offset moved by kTdInitRestartS or more and the window restarted.

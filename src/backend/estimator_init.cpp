@@ -3,11 +3,13 @@
 // gyroscope bias, gravity and velocities from the IMU.
 
 #include <Eigen/Core>
+#include <cstdio>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
 #include "backend/estimator.h"
 #include "backend/initializer.h"
+#include "backend/mono_init.h"
 
 namespace idyvins::backend {
 
@@ -40,6 +42,7 @@ bool Estimator::initStepStereo(FrameResult& r) {
 bool Estimator::initStep(FrameResult& r) {
   if (!options_.use_imu) return initStepStereo(r);
   if (!ex_.rotation_known && !calibrateRotation(r)) return false;
+  if (!rig_.stereo) return initStepMono(r);
   const int n = w_.count;
   if (n > 0) {
     if (!pnp(n)) {
@@ -184,12 +187,20 @@ bool Estimator::alignAndStart() {
   for (int i = 1; i <= w_.count; ++i) w_.frames[i].pre->repropagate(Vector3d::Zero(), bg);
   const Alignment a = alignVelocityGravity(w_.poses(), pre, noise_.g_norm);
   if (!a.ok) return false;
+  std::vector<Vector3d> p;
+  for (int i = 0; i <= w_.count; ++i) p.push_back(w_.frames[i].nav().p_w_b);
+  startAligned(p, q, a, bg);
+  return true;
+}
+
+void Estimator::startAligned(const std::vector<Vector3d>& p_w_b, const std::vector<Quaterniond>& q_w_b,
+                             const Alignment& a, const Vector3d& bg) {
   const Quaterniond R0 = Quaterniond::FromTwoVectors(a.g_w, Vector3d::UnitZ());
   const bool from_last_good = biasesFromLastGood();
   for (int i = 0; i <= w_.count; ++i) {
     imu::NavState s = w_.frames[i].nav();
-    s.p_w_b = R0 * s.p_w_b;
-    s.q_w_b = (R0 * s.q_w_b).normalized();
+    s.p_w_b = R0 * p_w_b[i];
+    s.q_w_b = (R0 * q_w_b[i]).normalized();
     s.v_w = R0 * a.v_w[i];
     s.bg = bg;
     s.ba = from_last_good ? seg_.last_good->ba : Vector3d::Zero();
@@ -200,6 +211,67 @@ bool Estimator::alignAndStart() {
     *seg_.bias_anchor << seg_.last_good->ba, seg_.last_good->bg;
   }
   w_.initialized = true;
+}
+
+bool Estimator::initStepMono(FrameResult& r) {
+  const int n = w_.count;
+  // Until the structure is known the frames hold their IMU-predicted orientation only (an
+  // unaligned prediction's position runs away).
+  imu::NavState s = w_.frames[n].nav();
+  s.p_w_b.setZero();
+  s.v_w.setZero();
+  w_.frames[n].setNav(s);
+  if (n < kWindowSize) {
+    r.status =
+        "initializing (one camera): " + std::to_string(n + 1) + "/" + std::to_string(kWindowSize + 1) + " frames";
+    return false;
+  }
+  std::vector<MonoTrack> tracks;
+  for (const auto& [id, lm] : w_.fm.landmarks()) {
+    if (lm.obs.size() < 2) continue;
+    MonoTrack& t = tracks.emplace_back();
+    t.start_frame = lm.start_frame;
+    for (const auto& o : lm.obs) t.xy.push_back(o.xy);
+  }
+  std::string why;
+  const std::optional<MonoStructure> sfm = monocularStructure(tracks, n + 1, rig_.focal_px, MonoSfmOptions{}, why);
+  if (!sfm || !alignMonoAndStart(*sfm)) {
+    r.status = "initializing (one camera): " + (sfm ? std::string("IMU alignment failed") : why) + ", sliding";
+    slide(r.keyframe);
+    return false;
+  }
+  r.status = "initialized (one camera)";
+  if (seg_.reanchor_pending) {
+    r.biases_from_last_good = biasesFromLastGood();
+    r.reanchored = reanchor();
+  }
+  return true;
+}
+
+bool Estimator::alignMonoAndStart(const MonoStructure& sfm) {
+  const Quaterniond q_c_b = rig_.T_b_c0.q_b_c.conjugate();
+  std::vector<Quaterniond> q;
+  std::vector<Vector3d> p_c;
+  std::vector<const imu::Preintegration*> pre;
+  for (int i = 0; i <= w_.count; ++i) {
+    if (i > 0 && !w_.frames[i].pre) return false;
+    q.push_back((Quaterniond(sfm.T_w_c[i].linear()) * q_c_b).normalized());
+    p_c.push_back(sfm.T_w_c[i].translation());
+    pre.push_back(w_.frames[i].pre.get());
+  }
+  const Vector3d bg = solveGyroBias(q, pre);
+  for (int i = 1; i <= w_.count; ++i) w_.frames[i].pre->repropagate(Vector3d::Zero(), bg);
+  const ScaledAlignment a = alignWithScale(q, p_c, rig_.T_b_c0.t_b_c, pre, noise_.g_norm);
+  if (!a.ok || a.scale_sigma > kMonoMaxScaleSigma) return false;
+  std::vector<Vector3d> p;
+  for (int i = 0; i <= w_.count; ++i) p.push_back(a.scale * p_c[i] - q[i] * rig_.T_b_c0.t_b_c);
+  startAligned(p, q, a, bg);
+  // The landmarks from the metric poses.
+  for (auto& [id, lm] : w_.fm.landmarks()) {
+    lm.inv_depth = -1.0;
+    lm.ray_estimated = false;
+  }
+  w_.fm.triangulate(w_.poses(), rig_);
   return true;
 }
 

@@ -20,7 +20,9 @@ using Eigen::Vector3d;
 
 void Estimator::slide(bool keyframe) {
   if (w_.count < kWindowSize) return;
-  if (keyframe || !w_.initialized)
+  // Before the initialization a stereo window slides its oldest frame out, a monocular one
+  // keeps its keyframes (the parallax its structure from motion needs).
+  if (keyframe || (!w_.initialized && rig_.stereo))
     marginalizeOldest();
   else
     dropSecondNewest();

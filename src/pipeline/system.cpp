@@ -18,8 +18,13 @@
 namespace idyvins::pipeline {
 
 void checkRunnable(const Config& config) {
-  if (config.num_cam != 2 || config.T_b_c.size() < 2)
-    throw InputError(config.path, "idyvins runs stereo configs only (num_of_cam: 2; imu: 1 or 0)");
+  if (config.T_b_c.size() != static_cast<std::size_t>(config.num_cam))
+    throw InputError(config.path, "num_of_cam: " + std::to_string(config.num_cam) + " with " +
+                                      std::to_string(config.T_b_c.size()) + " camera extrinsics");
+  if (config.num_cam == 1 && !config.use_imu)
+    throw InputError(config.path,
+                     "num_of_cam: 1 with imu: 0: one camera needs the IMU for its scale (monocular "
+                     "odometry without it is not supported)");
   if (!config.use_imu && config.estimator.estimate_td)
     throw InputError(config.path, "imu: 0 with estimate_td: 1: without an IMU there is no offset to estimate");
 }
