@@ -141,7 +141,7 @@ EurocDataset readEurocDataset(const std::string& dir, const EurocOptions& option
   if (!fs::is_directory(root / "cam0")) throw InputError(ds.root, "missing folder cam0/");
   if (!fs::is_directory(root / "imu0")) throw InputError(ds.root, "missing folder imu0/");
   ds.cam0 = readImageList(cam_csv("cam0"), cam_data("cam0"));
-  if (fs::is_directory(root / "cam1")) ds.cam1 = readImageList(cam_csv("cam1"), cam_data("cam1"));
+  if (!options.left_only && fs::is_directory(root / "cam1")) ds.cam1 = readImageList(cam_csv("cam1"), cam_data("cam1"));
   ds.imu = readImuCsv((root / "imu0" / "data.csv").string());
 
   const auto gt_csv = root / "state_groundtruth_estimate0" / "data.csv";

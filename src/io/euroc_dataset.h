@@ -26,6 +26,7 @@ struct StereoPair {
 /// Options for reading a EuRoC folder.
 struct EurocOptions {
   TimeNs pair_tolerance_ns = 1'000'000;  ///< max |t0 - t1| for a stereo pair
+  bool left_only = false;                ///< one camera: cam1 not read, every cam0 row is a frame
 };
 
 /// Everything a EuRoC ASL folder holds, validated (time order, numbers, files).

@@ -39,7 +39,9 @@ OpenedDataset openDataset(const std::string& path, const DatasetRequest& r) {
 #if IDYVINS_HAVE_BAG
   if (isBagFile(path)) return openBag(path, r);
 #endif
-  EurocDataset ds = readEurocDataset(path);
+  EurocOptions options;
+  options.left_only = r.rig.num_cam == 1;  // a mono run takes every cam0 image, paired or not
+  EurocDataset ds = readEurocDataset(path, options);
   OpenedDataset out;
   out.root = ds.root;
   out.warnings = checkPlausible(ds, summarize(ds), r.rig);
