@@ -126,6 +126,21 @@ TEST_F(TinyEuroc, Valid) {
   EXPECT_EQ(readEurocDataset(root + "/mav0").pairs.size(), 3u);
 }
 
+TEST_F(TinyEuroc, OneCameraTakesEveryLeftImageWhetherCam1HasItsPartnerOrNot) {
+  // cam1 lacks the middle image: a stereo read drops that cam0 row, a one-camera read keeps it.
+  writeFile(csv("cam1/data.csv"), "#timestamp [ns],filename\n1000,1000.png\n1100,1100.png\n");
+  const EurocDataset stereo = readEurocDataset(root);
+  EXPECT_EQ(stereo.pairs.size(), 2u);
+  EXPECT_EQ(stereo.unmatched0.size(), 1u);
+  EurocOptions one;
+  one.left_only = true;
+  const EurocDataset mono = readEurocDataset(root, one);
+  EXPECT_TRUE(mono.cam1.empty());
+  ASSERT_EQ(mono.pairs.size(), 3u);
+  EXPECT_EQ(mono.pairs[1].t_ns, 1050);
+  EXPECT_TRUE(mono.unmatched0.empty());
+}
+
 TEST_F(TinyEuroc, MissingFolderOrFile) {
   expectError([&] { readEurocDataset(dir / "nope"); }, "nope: dataset folder does not exist");
   fs::create_directories(dir / "empty");
