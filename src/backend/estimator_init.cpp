@@ -3,7 +3,6 @@
 // gyroscope bias, gravity and velocities from the IMU.
 
 #include <Eigen/Core>
-#include <cstdio>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
