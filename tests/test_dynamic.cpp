@@ -944,3 +944,35 @@ TEST(IdyFilter, PointsBeyondTheMinimumDisparityAreNotJudged) {
 
 }  // namespace
 }  // namespace idyvins::dynamic
+
+TEST(DepthSign, StaticPointsHaveAPositiveInverseDepthOvertakingOnesANegativeOne) {
+  using idyvins::dynamic::depthSign;
+  using idyvins::dynamic::DepthSign;
+  // The camera moves 0.1 m forward (z) and turns 2° about y; P_a = R P_c + t.
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.035, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Vector3d t(0.01, 0.0, 0.1);
+  const double focal = 380, sigma_px = 0.25;
+  const auto observe = [&](const Eigen::Vector3d& P_a, const Eigen::Vector3d& P_a_moved) {
+    const Eigen::Vector3d P_c = R.transpose() * (P_a_moved - t);
+    return depthSign(P_a.head<2>() / P_a.z(), P_c.head<2>() / P_c.z(), R, t, 1e-6, focal, sigma_px);
+  };
+  const Eigen::Vector3d near(1.5, 0.5, 4.0), far(-20, 5, 200);
+  const DepthSign s = observe(near, near);
+  ASSERT_TRUE(s.valid);
+  EXPECT_NEAR(s.rho, 1.0 / 4.0, 1e-9);
+  EXPECT_GT(s.z, 5.0);  // measured 8.0
+  const DepthSign f = observe(far, far);
+  ASSERT_TRUE(f.valid);
+  EXPECT_NEAR(f.rho, 1.0 / 200.0, 1e-9);
+  EXPECT_GT(f.z, 0.0);
+  // A vehicle beside the camera overtaking it: 0.4 m forward in the same 0.05 s.
+  const DepthSign o = observe(near, near + Eigen::Vector3d(0, 0, 0.4));
+  ASSERT_TRUE(o.valid);
+  EXPECT_LT(o.rho, 0.0);
+  EXPECT_LT(o.z, -3.29);
+  // No translation: nothing can be said.
+  const Eigen::Vector3d P_c = R.transpose() * near;
+  EXPECT_FALSE(
+      depthSign(near.head<2>() / near.z(), P_c.head<2>() / P_c.z(), R, Eigen::Vector3d::Zero(), 0, focal, sigma_px)
+          .valid);
+}

@@ -232,6 +232,7 @@ void IdyFilter::apply(const frontend::FilterContext& ctx, std::vector<frontend::
   std::vector<bool> removed(tracked.size(), false);
   for (std::size_t j = 0; j < scored.size(); ++j) removed[scored[j]] = removed_scored[j];
   if (o_.stereo.enabled && o_.T_r_l) stereoTest(ctx, items, tracked, removed, R, fx);
+  if (o_.mono.enabled && !o_.T_r_l) monoTest(ctx, items, tracked, removed, R, fx);
 }
 
 std::vector<bool> IdyFilter::eliminateAndMark(std::vector<frontend::FilterItem>& items,
@@ -264,18 +265,19 @@ std::vector<bool> IdyFilter::eliminateAndMark(std::vector<frontend::FilterItem>&
 }
 
 bool IdyFilter::nextAnchor(const frontend::FilterItem& it, const frontend::MotionPrior& prior, const Matrix3d& R,
-                           double sigma_p2, StereoAnchor& anchor, int& strikes_before) const {
+                           double sigma_p2, bool need_right, StereoAnchor& anchor, int& strikes_before) const {
   // The anchor: the stereo observation the current one is compared with, and the camera
   // motion since, chained from the per-frame priors (P_anchor = R P_cur + t).
   const auto old = stereo_anchors_.find(it.feature->id);
   strikes_before = old != stereo_anchors_.end() ? old->second.strikes : 0;
-  if (old != stereo_anchors_.end() && (old->second.steps < o_.stereo.anchor_frames || !it.prev_has_right)) {
+  const bool prev_usable = it.prev_has_right || !need_right;
+  if (old != stereo_anchors_.end() && (old->second.steps < o_.stereo.anchor_frames || !prev_usable)) {
     anchor = old->second;
     anchor.t = anchor.R * prior.t_prev_cur + anchor.t;
     anchor.R = anchor.R * R;
     anchor.var_p += sigma_p2;
     ++anchor.steps;
-  } else if (it.prev_has_right) {
+  } else if (prev_usable) {
     anchor = {it.prev_xy, it.prev_xy_right, R, prior.t_prev_cur, sigma_p2, 1, 0};
   } else {
     return false;
@@ -320,19 +322,47 @@ void IdyFilter::judgeStereoFailures(std::vector<frontend::FilterItem>& items, co
     // its χ² is clear or the failures persist (slow motion along the line of sight).
     const bool clear = t.e.chi2 / noise_scale_ > o_.stereo.remove_chi2;
     const bool persistent = o_.stereo.persistent_strikes > 0 && kept.strikes >= o_.stereo.persistent_strikes;
-    if (kept.strikes < o_.stereo.strikes || !(clear || persistent)) {
+    if (!(clear || persistent)) {
       markCandidate(*it.feature);
       continue;
     }
-    ++stats_.stereo_eliminated;
-    if (eliminate_) {
-      it.remove = true;
-      it.feature->label = frontend::FeatureLabel::kEliminated;
-      ++stats_.eliminated;
-    } else {
-      markCandidate(*it.feature);
-    }
+    stats_.stereo_eliminated += strike(it, kept.strikes);
   }
+}
+
+bool IdyFilter::strike(frontend::FilterItem& it, int strikes) {
+  if (strikes < o_.stereo.strikes || !eliminate_) {
+    markCandidate(*it.feature);
+    return strikes >= o_.stereo.strikes;
+  }
+  it.remove = true;
+  it.feature->label = frontend::FeatureLabel::kEliminated;
+  ++stats_.eliminated;
+  return true;
+}
+
+void IdyFilter::monoTest(const frontend::FilterContext& ctx, std::vector<frontend::FilterItem>& items,
+                         const std::vector<std::size_t>& tracked, const std::vector<bool>& removed, const Matrix3d& R,
+                         double fx) {
+  const double sigma_p2 = std::max(0.0, ctx.prior->cov_p.trace()) / 3.0;
+  const double dt = std::max(0.0, toSeconds(ctx.t_cur_ns - ctx.t_prev_ns));
+  std::unordered_map<std::uint64_t, StereoAnchor> anchors;  // of the features seen now
+  for (std::size_t k = 0; k < tracked.size(); ++k) {
+    auto& it = items[tracked[k]];
+    StereoAnchor anchor;
+    int strikes_before = 0;
+    if (removed[k] || !nextAnchor(it, *ctx.prior, R, sigma_p2, false, anchor, strikes_before)) continue;
+    const double drift = o_.stereo.drift_mps * (anchor.steps - 1) * dt;
+    const DepthSign e = depthSign(anchor.xy_l, it.feature->xy, anchor.R, anchor.t, anchor.var_p + drift * drift, fx,
+                                  o_.stereo.sigma_px);
+    StereoAnchor& kept = anchors[it.feature->id] = anchor;
+    if (!e.valid) continue;
+    ++stats_.mono_tested;
+    if (e.z >= -o_.mono.z) continue;
+    kept.strikes = strikes_before + 1;
+    stats_.mono_eliminated += strike(it, kept.strikes);
+  }
+  stereo_anchors_ = std::move(anchors);
 }
 
 void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<frontend::FilterItem>& items,
@@ -347,7 +377,7 @@ void IdyFilter::stereoTest(const frontend::FilterContext& ctx, std::vector<front
     if (removed[k]) continue;
     StereoAnchor anchor;
     int strikes_before = 0;
-    if (!nextAnchor(it, *ctx.prior, R, sigma_p2, anchor, strikes_before)) continue;
+    if (!nextAnchor(it, *ctx.prior, R, sigma_p2, true, anchor, strikes_before)) continue;
     anchors[it.feature->id] = anchor;
     if (!it.feature->has_right) continue;
     ++stats_.stereo_tested;

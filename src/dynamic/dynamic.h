@@ -14,6 +14,7 @@
 #include "camera/camera_params.h"
 #include "core/measurements.h"
 #include "dynamic/idy_options.h"
+#include "dynamic/mono_motion.h"
 #include "frontend/feature_filter.h"
 #include "imu/preintegration.h"
 
@@ -112,6 +113,8 @@ struct FrameStats {
   std::size_t stereo_tested = 0;      ///< features with a right match now and a stereo anchor (stereo test)
   std::size_t stereo_eliminated = 0;  ///< of those, removed (or marked, idy-ba) by the stereo test
   double stereo_noise_scale = 1;      ///< the χ² were divided by this (stereoNoiseScale)
+  std::size_t mono_tested = 0;        ///< one camera: features with an anchor (depth-sign test)
+  std::size_t mono_eliminated = 0;    ///< of those, removed (or marked, idy-ba) by the depth-sign test
 };
 
 /// Extension of DESIGN §4.3 (not in the paper), the lost-corner test: where the motion
@@ -174,8 +177,16 @@ class IdyFilter final : public frontend::FeatureFilter {
                   double fx);
   /// This frame's anchor of an item (chained from its old one, or its previous stereo
   /// observation) and the old anchor's failure count; false when it has no anchor.
+  /// With need_right false (one camera) any previous observation starts an anchor.
   bool nextAnchor(const frontend::FilterItem& it, const frontend::MotionPrior& prior, const Eigen::Matrix3d& R,
-                  double sigma_p2, StereoAnchor& anchor, int& strikes_before) const;
+                  double sigma_p2, bool need_right, StereoAnchor& anchor, int& strikes_before) const;
+  /// One camera: the depth-sign test (mono_motion.h) over the tracked items not removed yet.
+  void monoTest(const frontend::FilterContext& ctx, std::vector<frontend::FilterItem>& items,
+                const std::vector<std::size_t>& tracked, const std::vector<bool>& removed, const Eigen::Matrix3d& R,
+                double fx);
+  /// A feature failed a motion test: the first failure marks, a repeated one removes
+  /// (idy, idy-pre) or marks (idy-ba); true when removed or marked by a repeat.
+  bool strike(frontend::FilterItem& it, int strikes);
   void markCandidate(frontend::Feature& f);
   /// One feature the stereo motion test ran on this frame.
   struct StereoTested {

@@ -48,6 +48,14 @@ struct StereoMotionOptions {
   bool shape = true;
 };
 
+/// Extension of DESIGN §4.3 (not in the paper) for one camera (no T_r_l): the depth-sign
+/// test (dynamic::depthSign). It uses the stereo test's sigma_px, strikes, anchor_frames
+/// and drift_mps.
+struct MonoMotionOptions {
+  bool enabled = true;  ///< `mono_motion_test`
+  double z = 3.29;      ///< a failure: the inverse depth this many σ below 0 (one-sided 99.95 %)
+};
+
 struct IdyOptions {
   double lambda_dy = 4.0;    ///< px², elimination threshold (eq. 4)
   double lambda_dy_c = 1.0;  ///< px², candidate threshold (eq. 6)
@@ -58,6 +66,7 @@ struct IdyOptions {
   /// both families and left at 2 (docs/method.md).
   int ds_from_observation = 2;
   StereoMotionOptions stereo;
+  MonoMotionOptions mono;
   // The lost-corner test's judgement (frontend::TrackerParams::lost_track_test).
   double lost_stereo_sigma_px = 0.25;   ///< per-coordinate match noise behind the depth tolerance
   double lost_base_tolerance_px = 2.0;  ///< tolerance on top of the depth and prior terms
@@ -108,6 +117,12 @@ struct IdyOptions {
              ParamRule::kNonNegative},
             m.min_disparity_px);
     v.param({"stereo_motion_shape", "0/1, each feature's noise shaped by its structure tensor"}, m.shape);
+    v.param({"mono_motion_test",
+             "0/1, one camera: the depth-sign test (uses the stereo test's sigma, strikes, "
+             "anchor, drift)"},
+            mono.enabled);
+    v.param({"mono_motion_z", "sigmas of inverse depth below 0 that fail the depth-sign test", ParamRule::kPositive},
+            mono.z);
     v.param({"cv_prior_acc_sigma", "m/s^2, imu: 0: unmodelled acceleration of the constant-velocity motion prior",
              ParamRule::kPositive},
             cv_prior_acc_sigma);

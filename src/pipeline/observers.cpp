@@ -149,6 +149,8 @@ nlohmann::json StatsRecorder::frameJson(const FrameOutput& out) {
            {"outliers_confirmed_dynamic", r.outliers_confirmed},
            {"stereo_tested", st.stereo_tested},
            {"stereo_eliminated", st.stereo_eliminated},
+           {"mono_tested", st.mono_tested},
+           {"mono_eliminated", st.mono_eliminated},
            {"stereo_noise_scale", st.stereo_noise_scale},
            {"lost_tested", ff.lost_tested},
            {"lost_moving", ff.lost_moving.size()},
