@@ -18,7 +18,9 @@ Vector3d solveGyroBias(const std::vector<Eigen::Quaterniond>& q, const std::vect
   for (std::size_t i = 1; i < q.size(); ++i) {
     const Eigen::Quaterniond q_ij = q[i - 1].conjugate() * q[i];
     const Matrix3d J = pre[i]->jacobian().block<3, 3>(imu::kR, imu::kBg);
-    const Vector3d r = 2.0 * (pre[i]->deltaQ().conjugate() * q_ij).vec();
+    // About each interval's own linearization bias, so the result is the bias itself whatever
+    // bias each preintegration was last propagated with (a failed start repropagates them).
+    const Vector3d r = 2.0 * (pre[i]->deltaQ().conjugate() * q_ij).vec() + J * pre[i]->linearizedBg();
     A += J.transpose() * J;
     b += J.transpose() * r;
   }

@@ -11,8 +11,8 @@
 
 namespace idyvins::backend {
 
-/// Gyroscope bias correction δbg that best explains the relative rotations of
-/// consecutive poses: pre[i] integrates from frame i-1 to frame i (pre[0] unused).
+/// Gyroscope bias bg that best explains the relative rotations of consecutive poses: pre[i]
+/// integrates from frame i-1 to frame i (pre[0] unused), each linearized at its own bias.
 Eigen::Vector3d solveGyroBias(const std::vector<Eigen::Quaterniond>& q_w_b,
                               const std::vector<const imu::Preintegration*>& pre);
 
