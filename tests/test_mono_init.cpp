@@ -65,6 +65,33 @@ TEST(MonoInit, StructureFromMotionRecoversTheWindowsPosesUpToScale) {
   }
 }
 
+TEST(MonoInit, GyroscopeRotationsHoldTheStructuresRotations) {
+  std::vector<Isometry3d> truth;
+  const std::vector<MonoTrack> tracks = syntheticTracks(truth, true);
+  std::string why;
+  const auto free = monocularStructure(tracks, 11, 460.0, MonoSfmOptions{}, why);
+  ASSERT_TRUE(free) << why;
+  // The true frame-to-frame rotations, as a gyroscope good to 0.005° would give them.
+  MonoRotationPrior prior;
+  prior.sigma_rad = 0.005 * M_PI / 180.0;
+  prior.q_prev_c.assign(11, Eigen::Quaterniond::Identity());
+  for (int i = 1; i <= 10; ++i) prior.q_prev_c[i] = Eigen::Quaterniond((truth[i - 1].inverse() * truth[i]).linear());
+  const auto held = monocularStructure(tracks, 11, 460.0, MonoSfmOptions{}, why, &prior);
+  ASSERT_TRUE(held) << why;
+  auto worst = [&](const MonoStructure& s) {
+    double deg = 0;
+    for (int i = 1; i <= 10; ++i) {
+      const Eigen::Quaterniond q_est((s.T_w_c[i - 1].inverse() * s.T_w_c[i]).linear());
+      deg = std::max(deg, q_est.angularDistance(prior.q_prev_c[i]) * 180.0 / M_PI);
+    }
+    return deg;
+  };
+  std::printf("worst frame-to-frame rotation error: %.4f° free, %.4f° held\n", worst(*free), worst(*held));
+  EXPECT_LT(worst(*held), 0.5 * worst(*free));
+  EXPECT_LT(worst(*held), 0.01);
+  EXPECT_LT(held->rms_px, 0.5);
+}
+
 TEST(MonoInit, StructureFromMotionSaysWhenTheCameraOnlyTurns) {
   std::vector<Isometry3d> truth;
   const std::vector<MonoTrack> tracks = syntheticTracks(truth, false);

@@ -97,6 +97,8 @@ class Estimator {
   /// (keyframes by parallax) until both succeed.
   bool initStepMono(FrameResult& result);
   bool alignMonoAndStart(const MonoStructure& sfm);
+  /// The window's camera rotations frame to frame from the gyroscope, its bias from `sfm`.
+  MonoRotationPrior gyroRotations(const MonoStructure& sfm) const;
   /// estimate_td: the offset from the rotations of the initialization's poses over
   /// kTdSearchSpanS or more (alignRotationTimes); true while it collects them (the window
   /// slid) and when the offset moved by kTdInitRestartS or more and the window restarted.

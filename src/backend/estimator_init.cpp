@@ -233,7 +233,12 @@ bool Estimator::initStepMono(FrameResult& r) {
     for (const auto& o : lm.obs) t.xy.push_back(o.xy);
   }
   std::string why;
-  const std::optional<MonoStructure> sfm = monocularStructure(tracks, n + 1, rig_.focal_px, MonoSfmOptions{}, why);
+  std::optional<MonoStructure> sfm = monocularStructure(tracks, n + 1, rig_.focal_px, MonoSfmOptions{}, why);
+  if (sfm) {
+    // Again with the rotations held to the gyroscope's (its bias from the first structure).
+    const MonoRotationPrior prior = gyroRotations(*sfm);
+    if (auto held = monocularStructure(tracks, n + 1, rig_.focal_px, MonoSfmOptions{}, why, &prior)) sfm = held;
+  }
   if (!sfm || !alignMonoAndStart(*sfm)) {
     r.status = "initializing (one camera): " + (sfm ? std::string("IMU alignment failed") : why) + ", sliding";
     slide(r.keyframe);
@@ -245,6 +250,27 @@ bool Estimator::initStepMono(FrameResult& r) {
     r.reanchored = reanchor();
   }
   return true;
+}
+
+MonoRotationPrior Estimator::gyroRotations(const MonoStructure& sfm) const {
+  const Quaterniond q_c_b = rig_.T_b_c0.q_b_c.conjugate();
+  std::vector<Quaterniond> q;
+  std::vector<const imu::Preintegration*> pre;
+  for (int i = 0; i <= w_.count; ++i) {
+    if (i > 0 && !w_.frames[i].pre) return {};
+    q.push_back((Quaterniond(sfm.T_w_c[i].linear()) * q_c_b).normalized());
+    pre.push_back(w_.frames[i].pre.get());
+  }
+  const Vector3d bg = solveGyroBias(q, pre);
+  MonoRotationPrior prior;
+  prior.q_prev_c.resize(q.size(), Quaterniond::Identity());
+  double var = 0;
+  for (int i = 1; i <= w_.count; ++i) {
+    prior.q_prev_c[i] = (q_c_b * pre[i]->correctedDeltaQ(bg) * rig_.T_b_c0.q_b_c).normalized();
+    var = std::max(var, pre[i]->covariance().block<3, 3>(imu::kR, imu::kR).diagonal().maxCoeff());
+  }
+  prior.sigma_rad = std::sqrt(var);
+  return prior;
 }
 
 bool Estimator::alignMonoAndStart(const MonoStructure& sfm) {

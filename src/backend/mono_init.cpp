@@ -86,9 +86,37 @@ struct ReprojectionError {
   }
 };
 
+/// The relative rotation of two cameras (q_c_w each) against the gyroscope's, per axis, in
+/// the reprojection errors' unit (normalized plane, 1 px ~ 1 / focal): · 1 / (focal σ).
+struct RelativeRotationError {
+  Eigen::Quaterniond q_prev_c;
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* qa, const T* qb, T* r) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q_a_w(qa), q_b_w(qb);
+    const Eigen::Quaternion<T> e = q_prev_c.cast<T>().conjugate() * (q_a_w * q_b_w.conjugate());
+    const T s = e.w() < T(0) ? T(-2.0 * inv_sigma) : T(2.0 * inv_sigma);
+    r[0] = s * e.x();
+    r[1] = s * e.y();
+    r[2] = s * e.z();
+    return true;
+  }
+};
+
+/// The gyroscope's frame-to-frame rotations as residuals between the cameras q (q_c_w).
+void addRotationPrior(ceres::Problem& problem, std::vector<Eigen::Quaterniond>& q, const MonoRotationPrior& prior,
+                      double focal_px) {
+  for (std::size_t i = 1; i < q.size(); ++i)
+    if (problem.HasParameterBlock(q[i - 1].coeffs().data()) && problem.HasParameterBlock(q[i].coeffs().data()))
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RelativeRotationError, 3, 4, 4>(
+                                   new RelativeRotationError{prior.q_prev_c[i], 1.0 / (focal_px * prior.sigma_rad)}),
+                               nullptr, q[i - 1].coeffs().data(), q[i].coeffs().data());
+}
+
 /// Bundle adjustment of every pose and point; the reference pose and the newest camera's
-/// translation held (the gauge and the unit scale). Returns the RMS error (px).
-double bundleAdjust(Sfm& s, int reference, double focal_px) {
+/// translation held (the gauge and the unit scale); with a prior, consecutive rotations held
+/// to the gyroscope's. Returns the RMS error (px).
+double bundleAdjust(Sfm& s, int reference, double focal_px, const MonoRotationPrior* prior) {
   const int frames = static_cast<int>(s.T_w_c.size());
   std::vector<Eigen::Quaterniond> q(static_cast<std::size_t>(frames));
   std::vector<Vector3d> t(static_cast<std::size_t>(frames));
@@ -113,6 +141,7 @@ double bundleAdjust(Sfm& s, int reference, double focal_px) {
       ++residuals;
     }
   }
+  if (prior) addRotationPrior(problem, q, *prior, focal_px);
   for (int i = 0; i < frames; ++i)
     if (problem.HasParameterBlock(q[i].coeffs().data())) problem.SetManifold(q[i].coeffs().data(), &quaternion);
   const int newest = frames - 1;
@@ -177,7 +206,8 @@ std::optional<Isometry3d> relativePose(const Sfm& s, int a, int newest, double f
 }  // namespace
 
 std::optional<MonoStructure> monocularStructure(const std::vector<MonoTrack>& tracks, int frames, double focal_px,
-                                                const MonoSfmOptions& o, std::string& why) {
+                                                const MonoSfmOptions& o, std::string& why,
+                                                const MonoRotationPrior* prior) {
   const int newest = frames - 1;
   Sfm s{tracks, std::vector<std::optional<Isometry3d>>(static_cast<std::size_t>(frames)),
         std::vector<std::optional<Vector3d>>(tracks.size())};
@@ -214,7 +244,7 @@ std::optional<MonoStructure> monocularStructure(const std::vector<MonoTrack>& tr
     }
   MonoStructure out;
   out.reference = l;
-  out.rms_px = bundleAdjust(s, l, focal_px);
+  out.rms_px = bundleAdjust(s, l, focal_px, prior && prior->sigma_rad > 0 ? prior : nullptr);
   for (const auto& p : s.p_w) out.points += p ? 1 : 0;
   for (const auto& T : s.T_w_c) out.T_w_c.push_back(*T);
   if (!(out.rms_px <= o.max_rms_px)) {

@@ -31,6 +31,16 @@ struct MonoSfmOptions {
   double max_rms_px = 2.0;        ///< after the bundle adjustment
 };
 
+/// The gyroscope's word on the window's rotations: q_prev_c[i], the camera's rotation from
+/// frame i − 1 to frame i (q_c(i−1)_c(i); [0] unused), with its standard deviation (rad per
+/// axis). The bundle adjustment holds the cameras to it: a single camera's forward motion
+/// trades rotation against translation (the bas-relief ambiguity) far more than a
+/// gyroscope's rotation is wrong over one frame.
+struct MonoRotationPrior {
+  std::vector<Eigen::Quaterniond> q_prev_c;
+  double sigma_rad = 0;
+};
+
 /// The window's camera poses up to scale: the world is the reference frame's camera, and the
 /// newest camera is 1 (unit) from it.
 struct MonoStructure {
@@ -44,7 +54,8 @@ struct MonoStructure {
 /// `why` set when no frame has enough parallax to the newest, a PnP fails, or the adjustment
 /// leaves a large error.
 std::optional<MonoStructure> monocularStructure(const std::vector<MonoTrack>& tracks, int frames, double focal_px,
-                                                const MonoSfmOptions& options, std::string& why);
+                                                const MonoSfmOptions& options, std::string& why,
+                                                const MonoRotationPrior* prior = nullptr);
 
 /// Alignment with the metric scale: body orientations q_w_b, camera positions p_w_c known up to
 /// the scale s (p_w_b = s p_w_c − R_w_b t_b_c), preintegrations pre[i] from frame i − 1 to i
