@@ -41,18 +41,6 @@ FeatureTracker::FeatureTracker(const camera::Rig& rig, const TrackerParams& para
   if (params.equalize) clahe_ = cv::createCLAHE(3.0, cv::Size(8, 8));  // VINS-Mono's setting
 }
 
-cv::Mat matchBrightness(const cv::Mat& image, const cv::Mat& reference, double tolerance) {
-  cv::Scalar mean_i, std_i, mean_r, std_r;
-  cv::meanStdDev(image, mean_i, std_i);
-  cv::meanStdDev(reference, mean_r, std_r);
-  if (std_i[0] < 1e-6 || mean_r[0] < 1e-6) return image;  // flat image: nothing to match
-  const double a = std_r[0] / std_i[0], b = mean_r[0] - a * mean_i[0];
-  if (std::abs(a - 1.0) <= tolerance && std::abs(mean_i[0] / mean_r[0] - 1.0) <= tolerance) return image;
-  cv::Mat out;
-  image.convertTo(out, CV_8U, a, b);
-  return out;
-}
-
 Feature FeatureTracker::featureOf(const Track& t, FeatureLabel label) {
   Feature f;
   f.id = t.id;
@@ -65,6 +53,7 @@ Feature FeatureTracker::featureOf(const Track& t, FeatureLabel label) {
 
 void FeatureTracker::reset() {
   prev_pyr_.clear();
+  prev_left_.release();
   prev_tracks_.clear();
   followed_.clear();
 }
@@ -100,10 +89,18 @@ void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Ma
   const cv::Size win(params_.klt_window, params_.klt_window);
   const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.klt_iterations,
                               params_.klt_epsilon);
-  cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, p0, p1, status, err, win, params_.klt_max_level, crit);
+  const std::vector<cv::Mat>* to = &pyr;
+  if (params_.temporal_gain_compensation && !prev_left_.empty()) {
+    const cv::Mat matched = matchBrightness(image, prev_left_);
+    if (matched.data != image.data) {
+      cv::buildOpticalFlowPyramid(matched, matched_pyr_, win, params_.klt_max_level);
+      to = &matched_pyr_;
+    }
+  }
+  cv::calcOpticalFlowPyrLK(prev_pyr_, *to, p0, p1, status, err, win, params_.klt_max_level, crit);
   if (params_.flow_back) {
     back = p0;
-    cv::calcOpticalFlowPyrLK(pyr, prev_pyr_, p1, back, status_back, err, win, params_.klt_back_max_level, crit,
+    cv::calcOpticalFlowPyrLK(*to, prev_pyr_, p1, back, status_back, err, win, params_.klt_back_max_level, crit,
                              cv::OPTFLOW_USE_INITIAL_FLOW);
   }
   for (std::size_t i = 0; i < p0.size(); ++i) {
@@ -417,6 +414,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& input, const MotionPrior& 
   matchNewAndFollowed(w.out, final_tracks);
 
   std::swap(prev_pyr_, cur_pyr_);  // keep both pyramids' buffers for the next frame
+  if (params_.temporal_gain_compensation) prev_left_ = frame.left;
   prev_tracks_ = std::move(final_tracks);
   prev_t_ns_ = frame.t_ns;
   w.out.filter_ms = w.filter_ms;

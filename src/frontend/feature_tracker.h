@@ -21,12 +21,6 @@
 
 namespace idyvins::frontend {
 
-/// `image` with its brightness mapped to `reference`'s: I' = a I + b with a and b such that
-/// the mean and standard deviation equal the reference's (8-bit, saturated). Returns
-/// `image` itself (no copy) when the standard deviations and the means already agree
-/// within `tolerance` (relative).
-cv::Mat matchBrightness(const cv::Mat& image, const cv::Mat& reference, double tolerance = 0.01);
-
 /// Tracks features across stereo frames; one instance per sequence.
 class FeatureTracker {
  public:
@@ -128,7 +122,10 @@ class FeatureTracker {
   Eigen::Matrix3d E_c1_c0_;  ///< essential matrix: x1ᵀ E x0 = 0
   Eigen::Isometry3d T_c1_c0_ = Eigen::Isometry3d::Identity();
   std::vector<cv::Mat> prev_pyr_, cur_pyr_, right_pyr_;  ///< reused across frames (no per-frame allocation)
-  bool has_right_image_ = false;                         ///< right_pyr_ holds the current frame's right image
+  std::vector<cv::Mat>
+      matched_pyr_;               ///< temporal_gain_compensation: the current image at the previous one's brightness
+  cv::Mat prev_left_;             ///< temporal_gain_compensation: the previous left image
+  bool has_right_image_ = false;  ///< right_pyr_ holds the current frame's right image
   cv::Mat detect_mask_;
   std::vector<Track> prev_tracks_;
   std::unordered_set<std::uint64_t> followed_;  ///< eliminated tracks still followed (follow_eliminated)

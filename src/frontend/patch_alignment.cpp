@@ -9,6 +9,18 @@
 
 namespace idyvins::frontend {
 
+cv::Mat matchBrightness(const cv::Mat& image, const cv::Mat& reference, double tolerance) {
+  cv::Scalar mean_i, std_i, mean_r, std_r;
+  cv::meanStdDev(image, mean_i, std_i);
+  cv::meanStdDev(reference, mean_r, std_r);
+  if (std_i[0] < 1e-6 || mean_r[0] < 1e-6) return image;  // flat image: nothing to match
+  const double a = std_r[0] / std_i[0], b = mean_r[0] - a * mean_i[0];
+  if (std::abs(a - 1.0) <= tolerance && std::abs(mean_i[0] / mean_r[0] - 1.0) <= tolerance) return image;
+  cv::Mat out;
+  image.convertTo(out, CV_8U, a, b);
+  return out;
+}
+
 namespace {
 
 /// Bilinear intensity of a CV_8UC1 image; false when (u, v) has no 2x2 neighbourhood.

@@ -13,6 +13,12 @@
 
 namespace idyvins::frontend {
 
+/// `image` with its brightness mapped to `reference`'s: I' = a I + b with a and b such that
+/// the mean and standard deviation equal the reference's (8-bit, saturated). Returns
+/// `image` itself (no copy) when the standard deviations and the means already agree
+/// within `tolerance` (relative).
+cv::Mat matchBrightness(const cv::Mat& image, const cv::Mat& reference, double tolerance = 0.01);
+
 /// Affine warp from template offsets x (px, relative to the patch centre) to
 /// image pixels: uv = A x + t.
 struct AffineWarp {

@@ -16,6 +16,10 @@ struct TrackerParams {
   /// tracking, detection and stereo matching (on the real EuRoC excerpt it gives more
   /// features a right match, docs/method.md).
   bool equalize = false;
+  /// Before the previous frame's tracks are followed, the current image's brightness is mapped
+  /// to the previous image's (gain and offset as for the right image below). KLT assumes equal
+  /// brightness; an auto-exposure step under vignetting otherwise shifts every track radially.
+  bool temporal_gain_compensation = false;
 
   // Stereo matching.
   /// Before the left -> right search, the right image's brightness is mapped to the left's
@@ -118,6 +122,8 @@ struct TrackerParams {
     v.param({"F_threshold", "px, F-matrix RANSAC threshold (mode ransac)", ParamRule::kPositive, true}, f_threshold);
     v.param({"flow_back", "0/1, forward-backward KLT check", ParamRule::kAny, true}, flow_back);
     v.param({"equalize", "0/1, CLAHE on both images"}, equalize);
+    v.param({"temporal_gain_compensation", "0/1, current image's gain and offset mapped to the previous one's"},
+            temporal_gain_compensation);
     v.section("Feature tracker: stereo matching");
     v.param({"stereo_gain_compensation", "0/1, right image's gain and offset mapped to the left's"},
             stereo_gain_compensation);
