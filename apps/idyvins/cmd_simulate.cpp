@@ -11,6 +11,7 @@
 #include "io/output_folder.h"
 #include "progress.h"
 #include "sim/simulator.h"
+#include "sim/vins_rigs.h"
 
 namespace idyvins::app {
 namespace {
@@ -27,6 +28,7 @@ struct SimulateArgs {
   std::string realism = "none";
   std::string family = "standard";
   std::string lens = "pinhole";
+  std::string rig;
 };
 
 /// VIODE's file name for a traffic level (0_none .. 3_high).
@@ -58,7 +60,8 @@ void writeBag(const SimulateArgs& a, const std::string& scene, const std::string
   const std::string bag = (fs::path(out) / bag_name).string();
   io::writeViodeBag(io::readEurocDataset(out), bag, w);
   // The config names VIODE's topics and the colour tables.
-  const std::string config_path = (config_dir / "sim_stereo_imu_config.yaml").string();
+  const std::string config_path =
+      (config_dir / (a.rig.empty() ? "sim_stereo_imu_config.yaml" : sim::findVinsRig(a.rig)->config_file)).string();
   Config cfg = loadConfig(config_path);
   cfg.imu_topic = "/imu0";
   cfg.image0_topic = "/cam0/image_raw";
@@ -94,6 +97,15 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
     throw CLI::ValidationError("--family", "expected standard|validation, got '" + a.family + "'");
   if (!sim::parseLens(a.lens, o.lens))
     throw CLI::ValidationError("--lens", "expected pinhole|kb|mei, got '" + a.lens + "'");
+  if (!a.rig.empty()) {
+    const sim::VinsRig* rig = sim::findVinsRig(a.rig);
+    if (!rig) throw CLI::ValidationError("--rig", "expected one of " + sim::vinsRigNames() + ", got '" + a.rig + "'");
+    if (o.lens != sim::Lens::kPinhole)
+      throw CLI::ValidationError("--rig", "a rig brings its own lenses: leave --lens at pinhole");
+    o.vins_rig = a.rig;
+    o.camera_rate_hz = rig->camera_rate_hz;
+    o.imu_rate_hz = rig->imu_rate_hz;
+  }
   o.scene.scene = scene;
   if (!sim::parseLevel(level, o.scene.level))
     throw CLI::ValidationError("--level", "expected none|low|mid|high, got '" + level + "'");
@@ -191,6 +203,19 @@ void addFormatOptions(CLI::App* cmd, SimulateArgs& args) {
       ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}));
 }
 
+/// --rig: one of VINS-Fusion's rigs in place of the family's.
+void addRigOption(CLI::App* cmd, SimulateArgs& args) {
+  SimulateArgs* a = &args;
+  cmd->add_option(
+      "--rig", a->rig,
+      "a rig of VINS-Fusion's config folder in place of the family's, from its published numbers:\n" +
+          sim::vinsRigNames() +
+          ".\nCameras (PINHOLE or MEI), mounts, image size, num_of_cam, imu and keys as the config states;\n"
+          "rates the sensor's usual ones (EuRoC, vi_car, simulation 20 / 200 Hz, A3 20 / 400 Hz, MYNT EYE\n"
+          "and RealSense 30 / 200 Hz, KITTI 10 / 100 Hz). cam0 flies the family's path; the written\n"
+          "config is VINS-Fusion's file name under DIR/config/. A one-camera config's folder has cam1 too");
+}
+
 void registerSimulate(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<SimulateArgs>();
   CLI::App* cmd =
@@ -230,6 +255,7 @@ void registerSimulate(CLI::App& app, int& exit_code) {
                   "diagonal in both cameras (Kannala-Brandt, or MEI with xi 1.2), the same scene, trajectory\n"
                   "and mounts, so a run compares with the pinhole render of the same seed")
       ->check(CLI::IsMember({"pinhole", "kb", "mei"}));
+  addRigOption(cmd, *a);
   cmd->add_option("--td-ms", a->td_ms,
                   "camera-IMU time offset of the written data (ms): image stamps are the capture times on the\n"
                   "IMU clock minus this, so a config's td of this value is right (VINS-Fusion's convention: image\n"

@@ -18,6 +18,7 @@
 #include "io/trajectory_io.h"
 #include "sim/renderer.h"
 #include "sim/textures.h"
+#include "sim/vins_rigs.h"
 
 namespace fs = std::filesystem;
 
@@ -122,6 +123,11 @@ void fisheyeLens(camera::CameraParams& p, Lens lens) {
 }  // namespace
 
 Config rigConfig(const SimOptions& options) {
+  if (!options.vins_rig.empty()) {
+    const VinsRig* r = findVinsRig(options.vins_rig);
+    if (!r) throw std::invalid_argument("unknown rig '" + options.vins_rig + "' (known: " + vinsRigNames() + ")");
+    return vinsRigConfig(*r);
+  }
   Config c;
   c.path = "sim_stereo_imu_config.yaml";
   c.num_cam = 2;
@@ -295,6 +301,8 @@ nlohmann::json metaJson(const SimOptions& o, const World& world, const SimResult
           {"parked_vehicles", parked},
           {"family", toString(o.family)},
           {"lens", toString(o.lens)},
+          {"vins_rig", o.vins_rig},
+          {"config", "config/" + (o.vins_rig.empty() ? std::string("sim_stereo_imu_config.yaml") : rig.path)},
           {"opening_vehicle", o.scene.opening_vehicle},
           {"duration_s", o.duration_s},
           {"t0_ns", o.t0_ns},
@@ -327,9 +335,13 @@ double significant(double v, int digits) {
 
 }  // namespace
 
-void writeVinsConfig(const Config& c, const std::string& folder, const std::string& name) {
+void writeVinsConfig(const Config& c, const std::string& folder, const std::string& name, bool as_published) {
   const fs::path dir(folder);
   fs::create_directories(dir);
+  if (as_published) {
+    saveConfig(c, (dir / name).string(), SavedKeys::kChanged);
+    return;
+  }
   // The values the simulator's configs have always carried: IMU keys to 6 significant
   // digits, extrinsics and intrinsics to 10 (so that old and new renders run alike).
   Config w = c;
@@ -357,7 +369,18 @@ Scene::Scene(const SimOptions& o)
                   o.family == Family::kValidation ? TrajectoryStyle::kHandheld : TrajectoryStyle::kDrone,
                   o.scene.route == Route::kBlock),
       frames_(static_cast<std::size_t>(std::floor(o.duration_s * o.camera_rate_hz + 1e-9)) + 1) {
-  for (int c = 0; c < 2; ++c) renderers_.emplace_back(rig_.cams[c], textures_);
+  for (int c = 0; c < 2; ++c) {
+    cams_[c] = rig_.cams[c];
+    cams_[c].width = rig_.image_width;
+    cams_[c].height = rig_.image_height;
+    renderers_.emplace_back(cams_[c], textures_);
+  }
+  if (!o.vins_rig.empty()) {
+    // The family's cam0 keeps its path; the rig's body is where its mount puts it.
+    SimOptions family = o;
+    family.vins_rig.clear();
+    trajectory_.setBodyOffset(rigConfig(family).T_b_c[0] * rig_.T_b_c[0].inverse());
+  }
   const RealismOptions& r = o.realism;
   if (!r.enabled) return;
   if (r.blur_samples < 1) throw std::invalid_argument("realism: blur_samples must be >= 1");
@@ -371,12 +394,12 @@ Scene::Scene(const SimOptions& o)
     }
   }
   for (int c = 0; c < 2; ++c)
-    vignetting_[c] = vignettingProfile(rig_.cams[c].width, rig_.cams[c].height, rig_.cams[c].cx, rig_.cams[c].cy,
-                                       r.vignetting_k1, r.vignetting_k2);
+    vignetting_[c] =
+        vignettingProfile(cams_[c].width, cams_[c].height, cams_[c].cx, cams_[c].cy, r.vignetting_k1, r.vignetting_k2);
   exposure_.assign(frames_, 1.0);
   if (!r.auto_exposure) return;
   // The meter: cam0 at a quarter of the resolution, vignetted, at each frame's time.
-  camera::CameraParams preview = rig_.cams[0];
+  camera::CameraParams preview = cams_[0];
   preview.width /= 4;
   preview.height /= 4;
   preview.fx /= 4;
@@ -547,7 +570,8 @@ SimResult simulate(const SimOptions& o, const std::string& out_dir,
   result.path_length_m = traj.pathLength(o.duration_s);
   writeImuAndTruth(mav0, imu, truth);
   writeSensorYamls(mav0, rig, o);
-  writeVinsConfig(rig, (root / "config").string(), "sim_stereo_imu_config.yaml");
+  writeVinsConfig(rig, (root / "config").string(), o.vins_rig.empty() ? "sim_stereo_imu_config.yaml" : rig.path,
+                  !o.vins_rig.empty());
 
   const std::size_t frames = scene.frameCount();
   const TimeNs frame_dt = static_cast<TimeNs>(std::llround(1e9 / o.camera_rate_hz));

@@ -66,6 +66,10 @@ struct SimOptions {
   /// Camera–IMU time offset of the written data (s): each image is stamped with its capture
   /// time on the IMU clock minus td_s (VINS-Fusion: image clock + td = IMU clock).
   double td_s = 0.0;
+  /// A rig of VINS-Fusion's config folder (sim/vins_rigs.h) in place of the family's: its
+  /// cameras, mounts, image size and keys; cam0 looks where the family's cam0 looks, the body
+  /// (IMU, ground truth) sits where the rig's mount puts it. Empty: the family's rig.
+  std::string vins_rig;
   TimeNs t0_ns = 1'700'000'000'000'000'000;
   double g_norm = 9.81;
 };
@@ -125,6 +129,7 @@ class Scene {
   Trajectory trajectory_;
   std::vector<Renderer> renderers_;
   std::size_t frames_;
+  camera::CameraParams cams_[2];  ///< the rendered cameras: the rig's at the config's image size
   cv::Mat vignetting_[2];         ///< realism: V(r) per camera
   std::vector<double> exposure_;  ///< realism: auto-exposure factor per frame
   /// realism: one camera's radiance averaged over the exposure (sub-frames along the
@@ -137,7 +142,9 @@ class Scene {
 SimResult simulate(const SimOptions& options, const std::string& out_dir,
                    const std::function<void(std::size_t, std::size_t)>& progress = {});
 
-/// Writes a VINS-Fusion config (+ camodocal camera files) for a rig into a folder.
-void writeVinsConfig(const Config& config, const std::string& folder, const std::string& name);
+/// Writes a VINS-Fusion config (+ camodocal camera files) for a rig into a folder: the family
+/// rigs' values rounded as their configs always were, or (`as_published`) every digit.
+void writeVinsConfig(const Config& config, const std::string& folder, const std::string& name,
+                     bool as_published = false);
 
 }  // namespace idyvins::sim

@@ -195,9 +195,21 @@ double Trajectory::yaw(double t) const {
   return std::atan2(v.y(), v.x()) + yaw_wave_.amp * std::sin(yaw_wave_.omega * t + yaw_wave_.phase);
 }
 
-Vector3d Trajectory::position(double t) const { return deriv(t, 0); }
+Vector3d Trajectory::position(double t) const {
+  return offset_ ? Vector3d(deriv(t, 0) + flownOrientation(t) * t_b_o_) : deriv(t, 0);
+}
 
 Eigen::Quaterniond Trajectory::orientation(double t) const {
+  return offset_ ? (flownOrientation(t) * q_b_o_).normalized() : flownOrientation(t);
+}
+
+void Trajectory::setBodyOffset(const Eigen::Isometry3d& T_b_o) {
+  offset_ = true;
+  q_b_o_ = Eigen::Quaterniond(T_b_o.linear()).normalized();
+  t_b_o_ = T_b_o.translation();
+}
+
+Eigen::Quaterniond Trajectory::flownOrientation(double t) const {
   if (style_ == TrajectoryStyle::kHandheld) {
     double pitch = 0, roll = 0;
     for (const Wave& w : pitch_waves_) pitch += w.amp * std::sin(w.omega * t + w.phase);
@@ -217,17 +229,33 @@ Eigen::Quaterniond Trajectory::orientation(double t) const {
   return Eigen::Quaterniond(R).normalized();
 }
 
-BodyState Trajectory::at(double t) const {
+BodyState Trajectory::flownAt(double t) const {
   BodyState s;
   s.p_w_b = deriv(t, 0);
   s.v_w = deriv(t, 1);
   s.a_w = deriv(t, 2);
-  s.q_w_b = orientation(t);
+  s.q_w_b = flownOrientation(t);
   const double h = 1e-4;
-  const Eigen::Quaterniond q0 = orientation(t - h), q1 = orientation(t + h);
+  const Eigen::Quaterniond q0 = flownOrientation(t - h), q1 = flownOrientation(t + h);
   s.omega_b = logQuat(q0.conjugate() * q1) / (2.0 * h);
   // Express the rate at t (the difference above is centred, in the frame at t - h):
   s.omega_b = (s.q_w_b.conjugate() * q0) * s.omega_b;
+  return s;
+}
+
+BodyState Trajectory::at(double t) const {
+  if (!offset_) return flownAt(t);
+  // o rides on the flown body: p_o = p_b + R r, v_o = v_b + ω_w × R r; its acceleration by a
+  // centred difference of that velocity (1 ms: truncation ~1e-7 m/s², far below any IMU's noise).
+  auto velocity = [&](const BodyState& b) { return Vector3d(b.v_w + (b.q_w_b * b.omega_b).cross(b.q_w_b * t_b_o_)); };
+  const BodyState b = flownAt(t);
+  const double h = 1e-3;
+  BodyState s;
+  s.p_w_b = b.p_w_b + b.q_w_b * t_b_o_;
+  s.v_w = velocity(b);
+  s.a_w = (velocity(flownAt(t + h)) - velocity(flownAt(t - h))) / (2.0 * h);
+  s.q_w_b = (b.q_w_b * q_b_o_).normalized();
+  s.omega_b = q_b_o_.conjugate() * b.omega_b;
   return s;
 }
 

@@ -37,6 +37,9 @@ class Trajectory {
   BodyState at(double t) const;
   Eigen::Quaterniond orientation(double t) const;
   Eigen::Vector3d position(double t) const;
+  /// From now on the body is another frame o rigidly attached to the one flown (T_b_o: o's
+  /// pose in it): at, orientation and position describe o (another rig's IMU on the same path).
+  void setBodyOffset(const Eigen::Isometry3d& T_b_o);
   /// Path length over [0, duration] (numerical, 1 ms steps).
   double pathLength(double duration) const;
 
@@ -45,6 +48,11 @@ class Trajectory {
     double amp, omega, phase;
   };
   Eigen::Vector3d deriv(double t, int order) const;
+  Eigen::Quaterniond flownOrientation(double t) const;
+  BodyState flownAt(double t) const;
+  bool offset_ = false;
+  Eigen::Quaterniond q_b_o_ = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d t_b_o_ = Eigen::Vector3d::Zero();
   double yaw(double t) const;
   void setUpBlockLap(std::mt19937_64& rng);                            ///< the drone's lap of a city block
   void setUpHandheld(const std::string& scene, std::mt19937_64& rng);  ///< a walk with the rig in hand

@@ -1,0 +1,114 @@
+// VINS-Fusion's rigs (sim/vins_rigs.h): written from their published numbers, read back
+// unchanged; another rig's body on the family's path keeps its IMU consistent with the truth.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <set>
+
+#include "config/config.h"
+#include "core/error.h"
+#include "imu/preintegration.h"
+#include "sim/simulator.h"
+#include "sim/vins_rigs.h"
+#include "test_util.h"
+
+namespace idyvins::sim {
+namespace {
+
+using Eigen::Vector3d;
+
+Eigen::Isometry3d poseOf(const BodyState& b) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = b.q_w_b.toRotationMatrix();
+  T.translation() = b.p_w_b;
+  return T;
+}
+
+TEST(VinsRigs, EveryConfigWrittenFromItsPublishedNumbersLoadsBackUnchanged) {
+  const std::vector<VinsRig>& rigs = vinsRigs();
+  ASSERT_EQ(rigs.size(), 18u);  // VINS-Fusion be55a93's config/ without its backup file
+  std::set<std::string> names;
+  for (const VinsRig& r : rigs) {
+    SCOPED_TRACE(r.name);
+    EXPECT_TRUE(names.insert(r.name).second);
+    EXPECT_EQ(findVinsRig(r.name), &r);
+    const test::TempDir dir;
+    const Config want = vinsRigConfig(r);
+    writeVinsConfig(want, dir.path().string(), r.config_file, true);
+    const std::string path = (std::filesystem::path(dir.path()) / r.config_file).string();
+    if (std::string(r.name) == "vi_car") {
+      // Its cam0 is the right camera: refused, saying so (docs/cli.md, VINS-Fusion's configs).
+      EXPECT_THROW(
+          try { loadConfig(path); } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("to the left of cam0"), std::string::npos) << e.what();
+            throw;
+          },
+          InputError);
+      continue;
+    }
+    const Config got = loadConfig(path);
+    EXPECT_EQ(got.num_cam, r.num_cam);
+    EXPECT_EQ(got.use_imu, r.imu);
+    EXPECT_EQ(got.image_width, r.width);
+    EXPECT_EQ(got.image_height, r.height);
+    for (int i = 0; i < r.num_cam; ++i) {
+      const camera::CameraParams &a = want.cams[i], &b = got.cams[i];
+      EXPECT_EQ(b.type, r.cams[i].mei ? camera::ModelType::kMei : camera::ModelType::kPinhole);
+      EXPECT_EQ(b.fx, a.fx);
+      EXPECT_EQ(b.fy, a.fy);
+      EXPECT_EQ(b.cx, a.cx);
+      EXPECT_EQ(b.cy, a.cy);
+      EXPECT_EQ(b.xi, a.xi);
+      for (std::size_t k = 0; k < 4; ++k) EXPECT_EQ(b.dist[k], a.dist[k]);
+      // The loader makes the rotations orthonormal (EuRoC's are off by 3e-13).
+      EXPECT_LT((got.T_b_c[i].matrix() - want.T_b_c[i].matrix()).cwiseAbs().maxCoeff(), 1e-9);
+    }
+    if (r.imu) {
+      EXPECT_EQ(got.imu.noise.acc_n, r.noise[0]);
+      EXPECT_EQ(got.imu.noise.gyr_w, r.noise[3]);
+      EXPECT_EQ(got.imu.noise.g_norm, r.noise[4]);
+    }
+    EXPECT_EQ(got.estimator.estimate_extrinsic, r.estimate_extrinsic);
+    EXPECT_EQ(got.estimator.estimate_td, r.estimate_td != 0);
+    EXPECT_EQ(got.tracker.max_cnt, r.max_cnt);
+  }
+  // A few published numbers, so that the table is the configs' and not a copy of itself.
+  EXPECT_EQ(findVinsRig("kitti_odom_00_02")->T_b_c[1][3], 0.537165718864418);
+  EXPECT_EQ(findVinsRig("mynteye_stereo_imu")->cams[0].xi, 1.4456544769803834);
+  EXPECT_EQ(findVinsRig("realsense_stereo_imu")->cams[0].k[0], 385.7544860839844);
+  EXPECT_EQ(findVinsRig("simulation")->width, 600);
+  EXPECT_EQ(findVinsRig("kitti_raw_09_30")->cams[0].width, 1226);  // its camera file's, not the config's 1241
+  EXPECT_EQ(findVinsRig("no_such_rig"), nullptr);
+}
+
+TEST(VinsRigs, AnotherRigsBodyOnTheFamilysPathKeepsCam0AndItsImuIntegratesToTheTruth) {
+  for (const char* name : {"simulation", "realsense_stereo_imu", "kitti_odom_00_02"}) {
+    SCOPED_TRACE(name);
+    SimOptions family;
+    family.duration_s = 10.0;
+    family.imu.scale = 0.0;
+    SimOptions o = family;
+    o.vins_rig = name;
+    const Config rig_family = rigConfig(family), rig = rigConfig(o);
+    Trajectory flown("city", 3), carried("city", 3);
+    carried.setBodyOffset(rig_family.T_b_c[0] * rig.T_b_c[0].inverse());
+    for (double t : {0.0, 3.3, 7.1}) {
+      const BodyState f = flown.at(t), c = carried.at(t);
+      const Eigen::Isometry3d T_w_c0_family = poseOf(f) * rig_family.T_b_c[0], T_w_c0 = poseOf(c) * rig.T_b_c[0];
+      EXPECT_LT((T_w_c0.matrix() - T_w_c0_family.matrix()).cwiseAbs().maxCoeff(), 1e-9) << t;
+    }
+    std::vector<ImuSample> imu;
+    std::vector<GroundTruthState> gt;
+    synthesizeImu(carried, o, imu, gt);
+    const ImuNoise noise{0.1, 0.01, 0.001, 0.0001, o.g_norm};
+    const imu::Preintegration pre =
+        imu::integrateBetween(imu, imu.front().t_ns, imu.back().t_ns, gt[0].ba, gt[0].bg, noise);
+    const imu::NavState end = pre.predict({gt[0].q_w_b, gt[0].p_w_b, gt[0].v_w, gt[0].ba, gt[0].bg});
+    EXPECT_LT((end.p_w_b - gt.back().p_w_b).norm(), 0.01);
+    EXPECT_LT(end.q_w_b.angularDistance(gt.back().q_w_b), 1e-4);
+  }
+}
+
+}  // namespace
+}  // namespace idyvins::sim
