@@ -342,6 +342,28 @@ TEST(Config, MissingRequiredKeyIsNamed) {
   expectError([&] { loadConfig(path); }, "cfg.yaml: missing required key 'acc_n'");
 }
 
+TEST(Config, MissingFrontEndAndSolverKeysTakeTheDefaultsWithOneWarning) {
+  // VINS-Fusion's simulation config has none of them (VINS-Fusion reads 0 for each).
+  TempDir dir;
+  std::string text = kConfig;
+  for (const char* line : {"max_cnt: 150\n", "min_dist: 30\n", "F_threshold: 1.0\n", "flow_back: 1\n",
+                           "max_solver_time: 0.04\n", "max_num_iterations: 8\n", "keyframe_parallax: 10.0\n"})
+    text = replace(text, line, "");
+  const Config c = loadConfig(writeConfig(dir, text, kCamera));
+  const Config defaults;
+  EXPECT_EQ(c.tracker.max_cnt, defaults.tracker.max_cnt);
+  EXPECT_EQ(c.estimator.max_num_iterations, defaults.estimator.max_num_iterations);
+  std::size_t named = 0;
+  for (const std::string& w : c.warnings)
+    if (w.find("VINS-Fusion keys missing, idyvins' defaults used") != std::string::npos) {
+      ++named;
+      for (const char* key : {"max_cnt 150", "min_dist 30", "F_threshold 1", "flow_back 1", "max_solver_time 0.04",
+                              "max_num_iterations 8", "keyframe_parallax 10"})
+        EXPECT_NE(w.find(key), std::string::npos) << key << " in: " << w;
+    }
+  EXPECT_EQ(named, 1u);
+}
+
 TEST(Config, WrongMatrixSizeNamesTheLine) {
   TempDir dir;
   const auto path = writeConfig(dir, replace(kConfig, "rows: 4", "rows: 3"), kCamera);

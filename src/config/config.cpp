@@ -315,15 +315,18 @@ bool satisfies(double v, ParamRule rule) {
 class YamlLoader final : public ParamVisitor {
  public:
   explicit YamlLoader(const YamlFile& f) : f_(f) {}
-  void section(const char*) override {}
+  /// The required front-end and solver keys the file lacks, each with the default taken (VINS-Fusion's
+  /// simulation config has none of them; VINS-Fusion reads 0 for a missing key).
+  std::string defaulted;
+  void section(const char* title) override { imu_section_ = std::string(title).rfind("IMU noise", 0) == 0; }
   void param(const ParamKey& k, double& v) override {
-    if (present(k)) v = checked(k, getDouble(f_, f_.root, k.name, k.unit));
+    if (present(k, v)) v = checked(k, getDouble(f_, f_.root, k.name, k.unit));
   }
   void param(const ParamKey& k, int& v) override {
-    if (present(k)) v = static_cast<int>(checked(k, getInt(f_, f_.root, k.name, k.unit)));
+    if (present(k, v)) v = static_cast<int>(checked(k, getInt(f_, f_.root, k.name, k.unit)));
   }
   void param(const ParamKey& k, bool& v) override {
-    if (!present(k)) return;
+    if (!present(k, v ? 1 : 0)) return;
     const int i = getInt(f_, f_.root, k.name, "0 or 1");
     if (i != 0 && i != 1)
       throw InputError(f_.path, lineOf(f_.root[k.name]),
@@ -331,11 +334,22 @@ class YamlLoader final : public ParamVisitor {
     v = i == 1;
   }
   void param(const ParamKey& k, std::string& v) override {
-    if (present(k)) v = getString(f_, f_.root, k.name, k.unit);
+    if (k.required || f_.root[k.name]) v = getString(f_, f_.root, k.name, k.unit);
   }
 
  private:
-  bool present(const ParamKey& k) const { return k.required || f_.root[k.name]; }
+  /// Read it: it is in the file, or required (the IMU's noise keys missing throw when read); a
+  /// required front-end or solver key missing keeps its default, named in `defaulted`.
+  bool present(const ParamKey& k, double default_value) {
+    if (f_.root[k.name]) return true;
+    if (!k.required) return false;
+    if (imu_section_) return true;
+    std::ostringstream text;
+    text << k.name << " " << default_value;
+    defaulted += (defaulted.empty() ? "" : ", ") + text.str();
+    return false;
+  }
+  bool imu_section_ = false;
   double checked(const ParamKey& k, double v) const {
     if (!satisfies(v, k.rule)) {
       std::ostringstream got;
@@ -471,23 +485,6 @@ class KeyNames final : public ParamVisitor {
 };
 
 /// Levenshtein distance of the lower-cased words.
-std::size_t editDistance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diag = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      const bool same =
-          std::tolower(static_cast<unsigned char>(a[i - 1])) == std::tolower(static_cast<unsigned char>(b[j - 1]));
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (same ? 0 : 1)});
-      diag = up;
-    }
-  }
-  return row[b.size()];
-}
-
 /// Warnings for the keys of `f` that idyvins does not read: an unknown key names the nearest
 /// known one when it looks like a typo; VINS-Fusion's unused keys are listed in one line.
 void warnAboutKeys(const YamlFile& f, Config& c) {
@@ -574,6 +571,9 @@ Config readConfig(const std::string& path, std::vector<std::string>* keys_read) 
   std::string mode_name = toString(c.mode);
   YamlLoader loader(f);
   declareAll(loader, c, mode_name);
+  if (!loader.defaulted.empty())
+    c.warnings.push_back(
+        path + ": VINS-Fusion keys missing, idyvins' defaults used (VINS-Fusion would read 0): " + loader.defaulted);
   checkTogether(f, mode_name, c);
   checkRig(f, c);
   warnAboutKeys(f, c);

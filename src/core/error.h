@@ -24,4 +24,7 @@ class InputError : public std::runtime_error {
   int line_ = 0;
 };
 
+/// Case-insensitive Levenshtein distance between two names (a message's nearest known key).
+std::size_t editDistance(const std::string& a, const std::string& b);
+
 }  // namespace idyvins
