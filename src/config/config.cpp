@@ -471,7 +471,9 @@ const std::vector<std::pair<std::string, std::string>> kVinsKeysNotUsed = {
     {"save_image", "not used"},
     {"use_gpu", "not used"},
     {"use_gpu_acc_flow", "not used"},
-    {"use_gpu_ceres", "not used"}};
+    {"use_gpu_ceres", "not used"},
+    {"visualize_imu_forward", "not used"},  // VINS-Mono's rviz keys (VINS-Fusion's simulation config)
+    {"visualize_camera_size", "not used"}};
 
 /// Every declared key's name.
 class KeyNames final : public ParamVisitor {
