@@ -49,6 +49,15 @@ def main(idy, work, src):
     check(r.returncode == 0 and len(lines) == 16 and os.path.exists(os.path.join(sharded, "bench.json")) and
           not os.path.exists(os.path.join(sharded, "runs", "city_none_s1_idy")),
           "--plan: 16 jobs, bench.json, nothing run (%s)" % r.stderr.strip()[-200:])
+    # One camera: the same jobs on cam0 alone, each from a copy of its config with num_of_cam 1.
+    mono, mono_plan = os.path.join(work, "mono"), os.path.join(work, "mono_plan.txt")
+    r = subprocess.run([idy, "bench"] + suite + ["--out", mono, "--plan", mono_plan, "--cameras", "mono"],
+                       capture_output=True, text=True)
+    jobs = json.load(open(os.path.join(mono, "bench.json")))["jobs"] if r.returncode == 0 else []
+    configs = [open(j["config"]).read() for j in jobs]
+    check(len(jobs) == 16 and all("\nnum_of_cam: 1\n" in c and "num_of_cam: 2" not in c for c in configs) and
+          all(j["config"].startswith(os.path.join(mono, "configs_mono")) for j in jobs),
+          "--cameras mono: 16 jobs, each config a copy with num_of_cam 1 (%s)" % r.stderr.strip()[-200:])
     killed = [l for l in lines if "# parking_lot_mid_s1_idy " in l]
     check(len(killed) == 1, "the plan names each job")
     sh("timeout -s KILL 1 bash -c %s" % json.dumps(killed[0]))  # killed mid-run

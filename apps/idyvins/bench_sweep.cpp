@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <fstream>
 #include <map>
+#include <regex>
+#include <sstream>
 
 #include "commands.h"
 #include "config/config.h"
@@ -202,6 +204,22 @@ nlohmann::json withoutTiming(const nlohmann::json& summary, nlohmann::json& timi
     }
   }
   return kept;
+}
+
+std::string oneCameraConfig(const std::string& config, const fs::path& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw InputError(dir.string(), "cannot create folder: " + ec.message());
+  for (const auto& e : fs::directory_iterator(fs::path(config).parent_path()))
+    if (e.is_regular_file()) fs::copy_file(e.path(), dir / e.path().filename(), fs::copy_options::overwrite_existing);
+  std::ifstream in(config);
+  std::stringstream text;
+  text << in.rdbuf();
+  static const std::regex key("^num_of_cam:.*$", std::regex::multiline);
+  if (!std::regex_search(text.str(), key)) throw InputError(config, "no num_of_cam key to set to 1 (--cameras mono)");
+  const fs::path copy = dir / fs::path(config).filename();
+  std::ofstream(copy) << std::regex_replace(text.str(), key, "num_of_cam: 1");
+  return copy.string();
 }
 
 }  // namespace idyvins::app

@@ -33,6 +33,10 @@ std::string datasetChecksum(const std::string& path);
 /// Fills each job's input checksums (a config is read once per path).
 void checksumInputs(std::vector<Job>& jobs);
 
+/// A one-camera copy of `config`: its folder's files copied into `dir`, num_of_cam set to 1 (cam0
+/// of the same files); returns the copy's path. Throws InputError when the config has no num_of_cam.
+std::string oneCameraConfig(const std::string& config, const std::filesystem::path& dir);
+
 /// The shell command of one job: `idyvins run` into OUT/runs/<name>, its log beside it;
 /// skip_finished: preceded by a test that skips it when OUT/runs/<name>/stats.json exists.
 std::string jobCommand(const Job& job, const std::filesystem::path& out, const std::string& exe, int threads,

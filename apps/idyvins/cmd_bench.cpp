@@ -32,7 +32,7 @@ namespace {
 
 struct BenchArgs {
   std::string suite = "standard", out, seeds = "1", data, modes, config = IDYVINS_VIODE_CONFIG;
-  std::string realism = "none";
+  std::string realism = "none", cameras = "stereo";
   double duration = 60.0;
   bool ablations = false;
   bool reuse_runs = false;
@@ -436,6 +436,8 @@ Sweep planSweep(const BenchArgs& a, const std::string& exe, const fs::path& out)
             {name, group, level, mode, ds, ds + "/config/sim_stereo_imu_config.yaml", name + "_" + mode, "", ""});
     }
   }
+  if (a.cameras == "mono")
+    for (Job& j : sw.jobs) j.config = oneCameraConfig(j.config, out / "configs_mono" / j.sequence);
   checksumInputs(sw.jobs);
   return sw;
 }
@@ -540,6 +542,10 @@ void registerBench(CLI::App& app, int& exit_code) {
   cmd->add_option("--data", a->data,
                   "standard, validation: where the simulated datasets live (default OUT/data); viode: VIODE's folder");
   cmd->add_option("-j,--jobs", a->jobs, "runs in parallel (default 2)")->check(CLI::Range(1, 64));
+  cmd->add_option("--cameras", a->cameras,
+                  "stereo (default): the suite's rig; mono: every run with num_of_cam 1 (cam0 of the same\n"
+                  "files; each config copied under OUT/configs_mono/<sequence>/)")
+      ->check(CLI::IsMember({"stereo", "mono"}));
   cmd->add_flag("--ablations", a->ablations, "also run idy-pre and idy-ba");
   cmd->add_option("--threads", a->run_threads,
                   "threads of each run: 1 (default) or 2 (pipelined runs, `run --threads 2`; use --jobs 1\n"
