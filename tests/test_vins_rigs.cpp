@@ -74,7 +74,7 @@ TEST(VinsRigs, EveryConfigWrittenFromItsPublishedNumbersLoadsBackUnchanged) {
     EXPECT_EQ(got.tracker.max_cnt, r.max_cnt);
   }
   // A few published numbers, so that the table is the configs' and not a copy of itself.
-  EXPECT_EQ(findVinsRig("kitti_odom_00_02")->T_b_c[1][3], 0.537165718864418);
+  EXPECT_EQ(findVinsRig("kitti_odom_00_02")->T_b_c[1].m[3], 0.537165718864418);
   EXPECT_EQ(findVinsRig("mynteye_stereo_imu")->cams[0].xi, 1.4456544769803834);
   EXPECT_EQ(findVinsRig("realsense_stereo_imu")->cams[0].k[0], 385.7544860839844);
   EXPECT_EQ(findVinsRig("simulation")->width, 600);

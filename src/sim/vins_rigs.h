@@ -20,6 +20,11 @@ struct VinsCamera {
   double dist[4];  ///< k1 k2 p1 p2
 };
 
+/// body_T_camX's top three rows, row-major.
+struct VinsMount {
+  double m[12];
+};
+
 /// One VINS-Fusion config. Its rates are not in the config: they are the sensor's usual ones,
 /// stated here. A one-camera config renders the second camera of its stereo sibling too (a
 /// EuRoC folder has cam1; the run takes cam0 only).
@@ -30,8 +35,8 @@ struct VinsRig {
   bool imu;
   int width, height;  ///< the config's image size (a camera file may state another)
   VinsCamera cams[2];
-  double T_b_c[2][12];  ///< body_T_cam0, body_T_cam1: the top three rows, row-major
-  double noise[5];      ///< acc_n gyr_n acc_w gyr_w g_norm
+  VinsMount T_b_c[2];  ///< body_T_cam0, body_T_cam1
+  double noise[5];     ///< acc_n gyr_n acc_w gyr_w g_norm
   int estimate_extrinsic, estimate_td, max_cnt;
   double min_dist;
   int flow_back;
