@@ -1,5 +1,6 @@
 // VINS-Fusion's rigs (sim/vins_rigs.h): written from their published numbers, read back
 // unchanged; another rig's body on the family's path keeps its IMU consistent with the truth.
+// The realism preset without some of its effects.
 
 #include <gtest/gtest.h>
 
@@ -9,6 +10,7 @@
 #include "config/config.h"
 #include "core/error.h"
 #include "imu/preintegration.h"
+#include "sim/camera_effects.h"
 #include "sim/simulator.h"
 #include "sim/vins_rigs.h"
 #include "test_util.h"
@@ -108,6 +110,30 @@ TEST(VinsRigs, AnotherRigsBodyOnTheFamilysPathKeepsCam0AndItsImuIntegratesToTheT
     EXPECT_LT((end.p_w_b - gt.back().p_w_b).norm(), 0.01);
     EXPECT_LT(end.q_w_b.angularDistance(gt.back().q_w_b), 1e-4);
   }
+}
+
+TEST(SimRealism, EffectsRemovedFromThePresetOneByOne) {
+  const RealismOptions full = realismPreset("euroc");
+  RealismOptions o = full;
+  removeRealismEffects(o, "vignetting,blur,exposure");
+  EXPECT_EQ(o.vignetting_k1, 0.0);
+  EXPECT_EQ(o.vignetting_k2, 0.0);
+  EXPECT_EQ(o.exposure_time_s, 0.0);
+  EXPECT_EQ(o.blur_samples, 1);
+  EXPECT_FALSE(o.auto_exposure);
+  EXPECT_EQ(o.defocus_sigma_px, full.defocus_sigma_px);  // the others kept
+  EXPECT_EQ(o.full_well, full.full_well);
+  EXPECT_TRUE(o.plain_ground);
+  EXPECT_EQ(o.preset, "euroc-without-vignetting,blur,exposure");
+  o = full;
+  removeRealismEffects(o, "gain,defocus,noise,plain");
+  EXPECT_EQ(o.gain[1], o.gain[0]);
+  EXPECT_EQ(o.defocus_sigma_px, 0.0);
+  EXPECT_EQ(o.read_noise, 0.0);
+  EXPECT_EQ(o.low_texture_fraction, 0.0);
+  EXPECT_FALSE(o.plain_ground);
+  EXPECT_TRUE(o.auto_exposure);
+  EXPECT_THROW(removeRealismEffects(o, "lens_flare"), std::invalid_argument);
 }
 
 }  // namespace

@@ -25,7 +25,7 @@ struct SimulateArgs {
   int threads = 2;
   bool opening_vehicle = false, standard_set = false, depth = false, force = false;
   std::string format = "euroc", compression = "none", viode_tables = IDYVINS_VIODE_TABLES;
-  std::string realism = "none";
+  std::string realism = "none", realism_without;
   std::string family = "standard";
   std::string lens = "pinhole";
   std::string rig;
@@ -89,6 +89,19 @@ io::OutputFolderOptions simulateFolderOptions(const SimulateArgs& a) {
   return o;
 }
 
+/// --realism and --realism-without.
+sim::RealismOptions realismOf(const SimulateArgs& a) {
+  sim::RealismOptions r = sim::realismPreset(a.realism);
+  if (!a.realism_without.empty() && !r.enabled)
+    throw CLI::ValidationError("--realism-without", "removes effects of a realism preset: give --realism euroc");
+  try {
+    sim::removeRealismEffects(r, a.realism_without);
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--realism-without", e.what());
+  }
+  return r;
+}
+
 int simulateOne(const SimulateArgs& a, const std::string& scene, const std::string& level, const std::string& dir) {
   io::OutputFolder folder(dir, simulateFolderOptions(a));
   const std::string& out = folder.path();
@@ -121,7 +134,7 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
   o.td_s = 1e-3 * a.td_ms;
   o.imu.scale = a.noise;
   o.image_noise_sigma = a.image_noise;
-  o.realism = sim::realismPreset(a.realism);
+  o.realism = realismOf(a);
   o.threads = a.threads;
   o.write_depth = a.depth;
   ProgressBar bar("simulate " + scene + " " + level, 0, "frames");
@@ -203,6 +216,20 @@ void addFormatOptions(CLI::App* cmd, SimulateArgs& args) {
       ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}));
 }
 
+/// --realism and --realism-without.
+void addRealismOptions(CLI::App* cmd, SimulateArgs& args) {
+  SimulateArgs* a = &args;
+  cmd->add_option("--realism", a->realism,
+                  "camera realism: none (default: today's images) | euroc (vignetting, right camera 10 %\n"
+                  "darker, auto-exposure, 6 ms motion blur along the true trajectory, defocus, shot and read\n"
+                  "noise; statistics matched to the real EuRoC excerpt, see README). Ground truth, masks\n"
+                  "and IMU are the same as without.")
+      ->check(CLI::IsMember({"none", "euroc"}));
+  cmd->add_option("--realism-without", a->realism_without,
+                  "the preset without some effects (which one does a result depend on?): comma-separated\n"
+                  "vignetting, gain, blur, defocus, exposure, noise, plain; meta.json names them");
+}
+
 /// --rig: one of VINS-Fusion's rigs in place of the family's.
 void addRigOption(CLI::App* cmd, SimulateArgs& args) {
   SimulateArgs* a = &args;
@@ -238,12 +265,7 @@ void registerSimulate(CLI::App& app, int& exit_code) {
   cmd->add_flag("--force", a->force, "write into an --out holding files simulate did not write (none is removed)");
   cmd->add_option("--noise", a->noise, "IMU noise scale (0 = perfect IMU, 1 = ADIS16448-like)");
   cmd->add_option("--image-noise", a->image_noise, "pixel noise sigma, gray levels (with --realism none)");
-  cmd->add_option("--realism", a->realism,
-                  "camera realism: none (default: today's images) | euroc (vignetting, right camera 10 %\n"
-                  "darker, auto-exposure, 6 ms motion blur along the true trajectory, defocus, shot and read\n"
-                  "noise; statistics matched to the real EuRoC excerpt, see README). Ground truth, masks\n"
-                  "and IMU are the same as without.")
-      ->check(CLI::IsMember({"none", "euroc"}));
+  addRealismOptions(cmd, *a);
   cmd->add_option("--family", a->family,
                   "standard (default): the sequences the defaults are tuned on; validation: the family no\n"
                   "default is tuned on: EuRoC's intrinsics without distortion, a 0.11 m stereo pair with small\n"

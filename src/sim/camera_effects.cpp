@@ -4,6 +4,7 @@
 #include <cmath>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 #include <stdexcept>
 
 namespace idyvins::sim {
@@ -35,6 +36,35 @@ RealismOptions realismPreset(const std::string& name) {
     return o;
   }
   throw std::invalid_argument("unknown realism preset '" + name + "' (none | euroc)");
+}
+
+void removeRealismEffects(RealismOptions& o, const std::string& effects) {
+  std::stringstream list(effects);
+  for (std::string e; std::getline(list, e, ',');) {
+    if (e == "vignetting") {
+      o.vignetting_k1 = o.vignetting_k2 = 0;
+    } else if (e == "gain") {
+      o.gain[1] = o.gain[0];
+      o.offset[1] = o.offset[0];
+    } else if (e == "blur") {
+      o.exposure_time_s = 0;
+      o.blur_samples = 1;
+    } else if (e == "defocus") {
+      o.defocus_sigma_px = 0;
+    } else if (e == "exposure") {
+      o.auto_exposure = false;
+    } else if (e == "noise") {
+      o.full_well = 0;
+      o.read_noise = 0;
+    } else if (e == "plain") {
+      o.low_texture_fraction = 0;
+      o.plain_ground = false;
+    } else {
+      throw std::invalid_argument("unknown realism effect '" + e +
+                                  "' (vignetting, gain, blur, defocus, exposure, noise, plain)");
+    }
+  }
+  if (!effects.empty()) o.preset += "-without-" + effects;
 }
 
 cv::Mat vignettingProfile(int width, int height, double cx, double cy, double k1, double k2) {

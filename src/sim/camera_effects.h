@@ -45,6 +45,12 @@ struct RealismOptions {
 /// excerpt, docs/real-images.md). Throws std::invalid_argument for another name.
 RealismOptions realismPreset(const std::string& name);
 
+/// The preset without some of its effects, for finding which one a result depends on: a
+/// comma-separated list of vignetting, gain (the right camera's), blur, defocus, exposure
+/// (auto-exposure), noise (shot and read) and plain (plain materials). The preset's name
+/// records them ("euroc-without-blur,noise"). Throws std::invalid_argument for another name.
+void removeRealismEffects(RealismOptions& options, const std::string& effects);
+
 /// V(r) per pixel (CV_32F, width x height) for principal point (cx, cy).
 cv::Mat vignettingProfile(int width, int height, double cx, double cy, double k1, double k2);
 
