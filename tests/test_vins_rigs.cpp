@@ -29,7 +29,7 @@ Eigen::Isometry3d poseOf(const BodyState& b) {
 
 TEST(VinsRigs, EveryConfigWrittenFromItsPublishedNumbersLoadsBackUnchanged) {
   const std::vector<VinsRig>& rigs = vinsRigs();
-  ASSERT_EQ(rigs.size(), 18u);  // VINS-Fusion be55a93's config/ without its backup file
+  ASSERT_EQ(rigs.size(), 18u);  // VINS-Fusion's config/ without its backup file
   std::set<std::string> names;
   for (const VinsRig& r : rigs) {
     SCOPED_TRACE(r.name);

@@ -4,7 +4,7 @@ namespace idyvins::sim {
 
 namespace {
 
-// Read off VINS-Fusion's config/ (be55a93): config and camera files' numbers, nothing else.
+// Read off VINS-Fusion's config/ folder: config and camera files' numbers, nothing else.
 // Each camera file and mount once; the configs sharing them name them.
 const VinsCamera kEurocCam0 = {"cam0_mei.yaml",
                                true,

@@ -1,5 +1,5 @@
 #pragma once
-// The rigs of VINS-Fusion's config/ folder (be55a93), from their published numbers: each as a
+// The rigs of VINS-Fusion's config/ folder (its commit: docs/cli.md), from their published numbers: each as a
 // Config the simulator renders with and writes back as VINS-Fusion's config and camodocal
 // camera files (`idyvins simulate --rig NAME`).
 
