@@ -17,6 +17,7 @@
 #include "sim/camera_effects.h"
 #include "sim/renderer.h"
 #include "sim/simulator.h"
+#include "sim_imu.h"
 #include "test_util.h"
 
 namespace idyvins::sim {
@@ -26,31 +27,9 @@ namespace fs = std::filesystem;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
-/// 10 s of noiseless IMU synthesized along `traj`, integrated from the first ground-truth
-/// state: the predicted end state, the true one and the number of samples.
-struct NoiselessEnd {
-  imu::NavState predicted;
-  GroundTruthState truth;
-  std::size_t samples = 0;
-};
-
-NoiselessEnd integrateNoiseless(const std::string& scene, const Trajectory& traj) {
-  SimOptions o;
-  o.scene.scene = scene;
-  o.duration_s = 10.0;
-  o.imu.scale = 0.0;
-  std::vector<ImuSample> imu;
-  std::vector<GroundTruthState> gt;
-  synthesizeImu(traj, o, imu, gt);
-  const ImuNoise noise{0.1, 0.01, 0.001, 0.0001, o.g_norm};
-  const imu::Preintegration pre =
-      imu::integrateBetween(imu, imu.front().t_ns, imu.back().t_ns, gt[0].ba, gt[0].bg, noise);
-  return {pre.predict({gt[0].q_w_b, gt[0].p_w_b, gt[0].v_w, gt[0].ba, gt[0].bg}), gt.back(), imu.size()};
-}
-
 TEST(SimImu, NoiselessImuIntegratesToGroundTruthWithin1cmOver10s) {
   for (const char* scene : {"city", "parking_lot"}) {
-    const NoiselessEnd end = integrateNoiseless(scene, Trajectory(scene, 3));
+    const test::NoiselessEnd end = test::integrateNoiseless(scene, Trajectory(scene, 3));
     ASSERT_EQ(end.samples, 2001u);
     const imu::NavState& s1 = end.predicted;
     const GroundTruthState& truth = end.truth;
@@ -83,7 +62,7 @@ TEST(SimImu, TrajectoryIsDroneLike) {
 TEST(SimImu, HandheldImuIntegratesToGroundTruthAndWalks) {
   for (const char* scene : {"city", "parking_lot"}) {
     const Trajectory traj(scene, 3, SimOptions{}.g_norm, TrajectoryStyle::kHandheld);
-    const NoiselessEnd end = integrateNoiseless(scene, traj);
+    const test::NoiselessEnd end = test::integrateNoiseless(scene, traj);
     // Measured 0.017 m (the 1.8 Hz gait integrated with 200 Hz midpoint steps).
     EXPECT_LT((end.predicted.p_w_b - end.truth.p_w_b).norm(), 0.03) << scene;
     EXPECT_LT(end.predicted.q_w_b.angularDistance(end.truth.q_w_b), 1e-4) << scene;
@@ -114,7 +93,7 @@ TEST(SimImu, HandheldImuIntegratesToGroundTruthAndWalks) {
 
 TEST(SimImu, BlockRouteLapsTheCityBlockAndItsImuIntegrates) {
   const Trajectory traj("city", 2, SimOptions{}.g_norm, TrajectoryStyle::kDrone, /*block=*/true);
-  const NoiselessEnd end = integrateNoiseless("city", traj);
+  const test::NoiselessEnd end = test::integrateNoiseless("city", traj);
   EXPECT_LT((end.predicted.p_w_b - end.truth.p_w_b).norm(), 0.01);
   EXPECT_LT(end.predicted.q_w_b.angularDistance(end.truth.q_w_b), 1e-4);
   // On the streets around the block x in [60, 130], y in [-40, 0] (within the waves), all four

@@ -97,6 +97,10 @@ class Estimator {
   /// (keyframes by parallax) until both succeed.
   bool initStepMono(FrameResult& result);
   bool alignMonoAndStart(const MonoStructure& sfm);
+  /// The window's body orientations and camera positions (up to scale) from `sfm`, with the
+  /// preintegrations between its frames; false when a frame has none.
+  bool monoWindow(const MonoStructure& sfm, std::vector<Eigen::Quaterniond>& q_w_b, std::vector<Eigen::Vector3d>& p_w_c,
+                  std::vector<const imu::Preintegration*>& pre) const;
   /// The window's camera rotations frame to frame from the gyroscope, its bias from `sfm`.
   MonoRotationPrior gyroRotations(const MonoStructure& sfm) const;
   /// estimate_td: the offset from the rotations of the initialization's poses over

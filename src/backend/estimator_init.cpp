@@ -252,15 +252,24 @@ bool Estimator::initStepMono(FrameResult& r) {
   return true;
 }
 
+bool Estimator::monoWindow(const MonoStructure& sfm, std::vector<Quaterniond>& q, std::vector<Vector3d>& p_c,
+                           std::vector<const imu::Preintegration*>& pre) const {
+  const Quaterniond q_c_b = rig_.T_b_c0.q_b_c.conjugate();
+  for (int i = 0; i <= w_.count; ++i) {
+    if (i > 0 && !w_.frames[i].pre) return false;
+    q.push_back((Quaterniond(sfm.T_w_c[i].linear()) * q_c_b).normalized());
+    p_c.push_back(sfm.T_w_c[i].translation());
+    pre.push_back(w_.frames[i].pre.get());
+  }
+  return true;
+}
+
 MonoRotationPrior Estimator::gyroRotations(const MonoStructure& sfm) const {
   const Quaterniond q_c_b = rig_.T_b_c0.q_b_c.conjugate();
   std::vector<Quaterniond> q;
+  std::vector<Vector3d> p_c;
   std::vector<const imu::Preintegration*> pre;
-  for (int i = 0; i <= w_.count; ++i) {
-    if (i > 0 && !w_.frames[i].pre) return {};
-    q.push_back((Quaterniond(sfm.T_w_c[i].linear()) * q_c_b).normalized());
-    pre.push_back(w_.frames[i].pre.get());
-  }
+  if (!monoWindow(sfm, q, p_c, pre)) return {};
   const Vector3d bg = solveGyroBias(q, pre);
   MonoRotationPrior prior;
   prior.q_prev_c.resize(q.size(), Quaterniond::Identity());
@@ -274,16 +283,10 @@ MonoRotationPrior Estimator::gyroRotations(const MonoStructure& sfm) const {
 }
 
 bool Estimator::alignMonoAndStart(const MonoStructure& sfm) {
-  const Quaterniond q_c_b = rig_.T_b_c0.q_b_c.conjugate();
   std::vector<Quaterniond> q;
   std::vector<Vector3d> p_c;
   std::vector<const imu::Preintegration*> pre;
-  for (int i = 0; i <= w_.count; ++i) {
-    if (i > 0 && !w_.frames[i].pre) return false;
-    q.push_back((Quaterniond(sfm.T_w_c[i].linear()) * q_c_b).normalized());
-    p_c.push_back(sfm.T_w_c[i].translation());
-    pre.push_back(w_.frames[i].pre.get());
-  }
+  if (!monoWindow(sfm, q, p_c, pre)) return false;
   const Vector3d bg = solveGyroBias(q, pre);
   for (int i = 1; i <= w_.count; ++i) w_.frames[i].pre->repropagate(Vector3d::Zero(), bg);
   const ScaledAlignment a = alignWithScale(q, p_c, rig_.T_b_c0.t_b_c, pre, noise_.g_norm);
