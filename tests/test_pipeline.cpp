@@ -688,6 +688,41 @@ TEST(PipelineSystem, RejectsConfigsAndFramesItCannotRun) {
   EXPECT_NO_THROW(System{config});
 }
 
+TEST(PipelineSystem, ARigWhoseCam0IsTheRightCameraRunsAsTheSameRigNamedTheOtherWay) {
+  // VINS-Fusion's vi_car names its right camera cam0. The same rig with cam0 and cam1 swapped
+  // in the config and in the frames gives the very run of the rig as named left to right, and
+  // the refined mounts come back under the config's names.
+  auto refine = [](Config& c) { c.estimator.estimate_extrinsic = 1; };
+  const SceneRun named = runScene(Mode::kIdy, 3.0, {}, {}, false, {}, refine);
+  const SceneRun swapped = runScene(
+      Mode::kIdy, 3.0, {}, {}, false,
+      [](StereoFrame& f) {
+        std::swap(f.left, f.right);
+        f.left_mask = cv::Mat();  // a dataset's cam0 masks would be the right image's
+        return true;
+      },
+      [&](Config& c) {
+        refine(c);
+        std::swap(c.cams[0], c.cams[1]);
+        std::swap(c.T_b_c[0], c.T_b_c[1]);
+        c.cam0_right = true;  // what loadConfig derives from such mounts (test_vins_rigs)
+      });
+  ASSERT_GT(named.result.trajectory.size(), 40u);
+  EXPECT_TRUE(sameTrajectory(named.result, swapped.result));
+  EXPECT_TRUE(sameMap(named.result.static_map, swapped.result.static_map));
+  EXPECT_TRUE(sameMap(named.result.dynamic_map, swapped.result.dynamic_map));
+  ASSERT_TRUE(named.result.summary.extrinsic && swapped.result.summary.extrinsic);
+  const ExtrinsicSummary &a = *named.result.summary.extrinsic, &b = *swapped.result.summary.extrinsic;
+  EXPECT_TRUE(a.T_b_c[0].isApprox(b.T_b_c[1], 1e-12));
+  EXPECT_TRUE(a.T_b_c[1].isApprox(b.T_b_c[0], 1e-12));
+  EXPECT_TRUE(b.estimate.t_b_c0.isApprox(b.T_b_c[0].translation(), 1e-12)) << "t_b_c0 is the config's cam0";
+  EXPECT_LT(ate(swapped), 0.05);
+  Config seg = sim::rigConfig(sim::SimOptions{});
+  seg.cam0_right = true;
+  seg.mode = Mode::kSeg;
+  EXPECT_THROW(System{seg}, InputError) << "seg: a dataset's masks are cam0's, the right camera's";
+}
+
 TEST(PipelineSystem, StereoAloneWithoutTheImuRunsAStreetInOnePiece) {
   // imu: 0 (VINS-Fusion's stereo-only configs): every frame without an IMU factor, the first
   // frame the world; the IMU samples the data has are not used.

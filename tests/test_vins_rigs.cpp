@@ -39,17 +39,18 @@ TEST(VinsRigs, EveryConfigWrittenFromItsPublishedNumbersLoadsBackUnchanged) {
     const Config want = vinsRigConfig(r);
     writeVinsConfig(want, dir.path().string(), r.config_file, true);
     const std::string path = (std::filesystem::path(dir.path()) / r.config_file).string();
-    if (std::string(r.name) == "vi_car") {
-      // Its cam0 is the right camera: refused, saying so (docs/cli.md, VINS-Fusion's configs).
-      EXPECT_THROW(
-          try { loadConfig(path); } catch (const InputError& e) {
-            EXPECT_NE(std::string(e.what()).find("to the left of cam0"), std::string::npos) << e.what();
-            throw;
-          },
-          InputError);
-      continue;
-    }
     const Config got = loadConfig(path);
+    // vi_car's cam0 is the right camera: loaded, said once, and run left camera first.
+    EXPECT_EQ(got.cam0_right, std::string(r.name) == "vi_car");
+    if (got.cam0_right) {
+      ASSERT_EQ(got.warnings.size(), 1u);
+      EXPECT_NE(got.warnings[0].find("m left of cam0: idyvins tracks on cam1"), std::string::npos) << got.warnings[0];
+      const Config left = leftFirst(got);
+      EXPECT_FALSE(left.cam0_right);
+      EXPECT_EQ(left.cams[0].fx, got.cams[1].fx);
+      EXPECT_EQ(left.cam_paths[1], got.cam_paths[0]);
+      EXPECT_GT((left.T_b_c[0].inverse() * left.T_b_c[1]).translation().x(), 0.1) << "cam1 right of cam0 now";
+    }
     EXPECT_EQ(got.num_cam, r.num_cam);
     EXPECT_EQ(got.use_imu, r.imu);
     EXPECT_EQ(got.image_width, r.width);

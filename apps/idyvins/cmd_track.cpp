@@ -86,6 +86,8 @@ int runTrack(const TrackArgs& a) {
     std::filesystem::create_directories(a.save_tracks, ec);
     if (ec) throw InputError(a.save_tracks, "cannot create folder: " + ec.message());
   }
+  const bool swap = config.cam0_right;  // cam0 is the right camera: the system tracks on cam1
+  config = leftFirst(config);
   pipeline::FrontEnd front_end(config);  // the front end exactly as `run` uses it
   const std::size_t total = a.max_frames ? std::min(a.max_frames, source.frameCount()) : source.frameCount();
   ProgressBar bar("track", total, "frames");
@@ -96,8 +98,10 @@ int runTrack(const TrackArgs& a) {
   while (frames < total) {
     auto m = source.next();
     if (!m) break;
-    const auto* f = std::get_if<StereoFrame>(&*m);
-    if (!f) continue;
+    const auto* given = std::get_if<StereoFrame>(&*m);
+    if (!given) continue;
+    const StereoFrame left_first = swap ? pipeline::leftFirst(*given) : StereoFrame{};
+    const StereoFrame* f = swap ? &left_first : given;
     const frontend::FeatureFrame out = front_end.track(*f, frontend::MotionPrior{});
     ++frames;
     features += out.features.size();

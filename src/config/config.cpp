@@ -515,7 +515,7 @@ void warnAboutKeys(const YamlFile& f, Config& c) {
 
 /// Plausibility of the rig beyond each key's own rule: the stereo baseline and the lens distortion (a unit or sign
 /// error makes each of them absurd).
-void checkRig(const YamlFile& f, const Config& c) {
+void checkRig(const YamlFile& f, Config& c) {
   if (c.cams.size() == 2) {
     const Eigen::Vector3d t = (c.T_b_c[0].inverse() * c.T_b_c[1]).translation();  // cam1 in cam0's frame
     const double b = t.norm();
@@ -523,11 +523,11 @@ void checkRig(const YamlFile& f, const Config& c) {
       throw InputError(f.path, lineOf(f.root["body_T_cam1"]),
                        "stereo baseline " + shortNumber(b) + " m (|t| of cam1 in cam0's frame): expected 0.01 to 3 m " +
                            (b > 3.0 ? "(translations in millimetres?)" : "(body_T_cam1 equal to body_T_cam0?)"));
-    if (t.x() < 0 && std::abs(t.x()) > std::max(std::abs(t.y()), std::abs(t.z())))
-      throw InputError(f.path, lineOf(f.root["body_T_cam1"]),
-                       "cam1 lies " + shortNumber(-t.x()) +
-                           " m to the left of cam0: idyvins expects cam0 left, cam1 "
-                           "right (body_T_cam0 and body_T_cam1 swapped?)");
+    c.cam0_right = t.x() < 0 && std::abs(t.x()) > std::max(std::abs(t.y()), std::abs(t.z()));
+    if (c.cam0_right)
+      c.warnings.push_back(f.path + ":" + std::to_string(lineOf(f.root["body_T_cam1"])) + ": cam1 lies " +
+                           shortNumber(-t.x()) + " m left of cam0: idyvins tracks on cam1, matches into cam0 " +
+                           "(features are cam1's; cam0's masks are not used)");
   }
   for (std::size_t i = 0; i < c.cams.size(); ++i) {
     // The image corner lifted to the normalized plane and compared with its undistorted guess:

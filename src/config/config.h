@@ -36,15 +36,20 @@ struct Config {
   bool use_imu = true;
   int num_cam = 2;
   int image_width = 0, image_height = 0;
-  std::vector<camera::CameraParams> cams;  ///< cam0 (left), cam1 (right)
+  std::vector<camera::CameraParams> cams;  ///< cam0, cam1 as the file names them
   std::vector<std::string> cam_paths;      ///< resolved camodocal file paths
   std::vector<Eigen::Isometry3d> T_b_c;    ///< body_T_camX: maps camera points into the body
-  imu::ImuOptions imu;                     ///< IMU noise, limits, spike gate
-  Mode mode = Mode::kIdy;                  ///< `mode`; what it switches on: config/modes.h
-  frontend::TrackerParams tracker;         ///< feature tracker keys
-  backend::EstimatorOptions estimator;     ///< solver, time offset and measurement-model keys
-  dynamic::IdyOptions idy;                 ///< the paper's method and the dynamic-scene tests
-  map::LoopOptions loop;                   ///< loop closure (off unless loop_closure: 1)
+  /// The file's cam0 is the right camera of the pair (cam1 lies to its left, VINS-Fusion's
+  /// vi_car): derived from the mounts, not a key. The system tracks on the left camera, so
+  /// it takes cam1's images as its left ones (leftFirst, pipeline::System) and names every
+  /// output camera as the file does.
+  bool cam0_right = false;
+  imu::ImuOptions imu;                  ///< IMU noise, limits, spike gate
+  Mode mode = Mode::kIdy;               ///< `mode`; what it switches on: config/modes.h
+  frontend::TrackerParams tracker;      ///< feature tracker keys
+  backend::EstimatorOptions estimator;  ///< solver, time offset and measurement-model keys
+  dynamic::IdyOptions idy;              ///< the paper's method and the dynamic-scene tests
+  map::LoopOptions loop;                ///< loop closure (off unless loop_closure: 1)
   /// Bag topics (VINS-Fusion's keys imu_topic, image0_topic, image1_topic; idyvins'
   /// groundtruth_topic, empty = none). Used when the dataset is a ROS1 bag.
   std::string imu_topic = "/imu0", image0_topic = "/cam0/image_raw", image1_topic = "/cam1/image_raw";
@@ -69,6 +74,10 @@ camera::CameraParams loadCameraFile(const std::string& path);
 /// the config's folder. Throws InputError naming file, line and expectation. With
 /// `keys_read`, the names of the config's keys it read (camera files aside) are appended.
 Config loadConfig(const std::string& path, std::vector<std::string>* keys_read = nullptr);
+
+/// The rig as the system runs it, left camera first: with cam0_right, the two cameras
+/// (cams, cam_paths, T_b_c) swapped and cam0_right false; otherwise `config` itself.
+Config leftFirst(const Config& config);
 
 /// Multi-line listing of every config key's value under its key name (what `info`
 /// prints): every key loadConfig reads appears in it.

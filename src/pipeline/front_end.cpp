@@ -26,6 +26,13 @@ FrontEnd::FrontEnd(const Config& config)
   idy_ = dynamic_cast<const dynamic::IdyFilter*>(filter_.get());
 }
 
+StereoFrame leftFirst(const StereoFrame& frame) {
+  StereoFrame f = frame;
+  std::swap(f.left, f.right);
+  f.left_mask = cv::Mat();
+  return f;
+}
+
 bool withheldTrack(std::uint64_t id, int seed, int permille) {
   if (permille <= 0) return false;
   // splitmix64 of id and seed: tracks spread evenly whatever their ids' order.

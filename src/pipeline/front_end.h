@@ -24,6 +24,10 @@ std::unique_ptr<frontend::FeatureFilter> makeFilter(const Config& config);
 /// a hash of id and seed below permille of 1000. Pure; the same answer in every frame.
 bool withheldTrack(std::uint64_t id, int seed, int permille);
 
+/// The pair left image first for a rig whose cam0 is the right camera (Config::cam0_right):
+/// the images swapped (reference-counted, no copy) and cam0's mask, the right image's, dropped.
+StereoFrame leftFirst(const StereoFrame& frame);
+
 /// Tracker + filter of one mode; one instance per sequence.
 class FrontEnd {
  public:

@@ -67,7 +67,7 @@ io::DatasetRequest datasetRequest(const Config& config, const std::string& groun
   r.image_width = config.image_width;
   r.image_height = config.image_height;
   r.rig = {config.num_cam, config.use_imu, config.imu.noise.g_norm};
-  r.masks = masks;
+  r.masks = masks && !config.cam0_right;  // cam0's masks are the right image's when cam0 is the right camera
   r.segmentation_rgb_ids = config.segmentation_rgb_ids;
   r.segmentation_vehicle_ids = config.segmentation_vehicle_ids;
   return r;
@@ -75,6 +75,7 @@ io::DatasetRequest datasetRequest(const Config& config, const std::string& groun
 
 io::OpenedDataset openDataset(const std::string& path, const Config& config, const std::string& groundtruth_topic,
                               bool masks) {
+  checkMaskCamera(config);
   io::OpenedDataset in = io::openDataset(path, datasetRequest(config, groundtruth_topic, masks));
   if (traitsOf(config.mode).needs_masks && !in.has_masks)
     throw InputError(in.root, in.is_bag ? "mode seg needs ground-truth masks: a segmentation_topic in the config "

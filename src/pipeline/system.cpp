@@ -27,6 +27,14 @@ void checkRunnable(const Config& config) {
                      "odometry without it is not supported)");
   if (!config.use_imu && config.estimator.estimate_td)
     throw InputError(config.path, "imu: 0 with estimate_td: 1: without an IMU there is no offset to estimate");
+  checkMaskCamera(config);
+}
+
+void checkMaskCamera(const Config& config) {
+  if (config.cam0_right && traitsOf(config.mode).needs_masks)
+    throw InputError(config.path, std::string("mode ") + toString(config.mode) +
+                                      " needs the left camera's masks, and this rig's cam0 (whose masks a dataset "
+                                      "has) is its right camera");
 }
 
 namespace {
@@ -113,7 +121,8 @@ struct System::Parts {
 };
 
 System::System(const Config& config, const RunOptions& run)
-    : config_(checkedConfig(config)),
+    : config_(leftFirst(checkedConfig(config))),
+      cam0_right_(config.cam0_right),
       mode_(config.mode),
       run_(run),
       parts_(std::make_unique<Parts>(config_)),
@@ -203,7 +212,7 @@ const FrameOutput* System::addFrame(const StereoFrame& frame) {
   if (traitsOf(mode_).needs_masks && frame.left_mask.empty())
     throw InputError("frame " + std::to_string(frame.t_ns),
                      std::string("mode ") + toString(mode_) + " needs the left image's ground-truth mask");
-  pending_.push_back(frame);  // images are reference-counted: no copy
+  pending_.push_back(cam0_right_ ? leftFirst(frame) : frame);  // images are reference-counted: no copy
   while (!pending_.empty() && (imuCovers(pending_.front()) || pending_.size() > kMaxPendingFrames)) {
     process(pending_.front());
     pending_.pop_front();
@@ -430,13 +439,18 @@ ExtrinsicSummary System::extrinsicSummary() const {
     e.estimate.t_b_c0 = config_.T_b_c[0].translation();
     e.estimate.q_b_c0 = Eigen::Quaterniond(config_.T_b_c[0].linear());
   }
-  const Eigen::Isometry3d T_b_c0 = Eigen::Translation3d(e.estimate.t_b_c0) * e.estimate.q_b_c0;
-  e.T_b_c = {T_b_c0};
-  for (std::size_t i = 1; i < config_.T_b_c.size(); ++i)  // the pair rigid: cam_i in cam0 as written
-    e.T_b_c.push_back(T_b_c0 * config_.T_b_c[0].inverse() * config_.T_b_c[i]);
-  e.rotation_change_deg =
-      Eigen::Quaterniond(config_.T_b_c[0].linear()).angularDistance(e.estimate.q_b_c0) * 180.0 / M_PI;
-  e.translation_change_m = (config_.T_b_c[0].translation() - e.estimate.t_b_c0).norm();
+  const Eigen::Isometry3d T_b_left = Eigen::Translation3d(e.estimate.t_b_c0) * e.estimate.q_b_c0;
+  for (const Eigen::Isometry3d& T_b_c : config_.T_b_c)  // the pair rigid: each camera as in the config
+    e.T_b_c.push_back(T_b_left * config_.T_b_c[0].inverse() * T_b_c);
+  const Eigen::Isometry3d* written = &config_.T_b_c[0];
+  if (cam0_right_) {  // named as the config names them: cam0 is the right camera
+    std::swap(e.T_b_c[0], e.T_b_c[1]);
+    written = &config_.T_b_c[1];
+    e.estimate.t_b_c0 = e.T_b_c[0].translation();
+    e.estimate.q_b_c0 = Eigen::Quaterniond(e.T_b_c[0].linear());
+  }
+  e.rotation_change_deg = Eigen::Quaterniond(written->linear()).angularDistance(e.estimate.q_b_c0) * 180.0 / M_PI;
+  e.translation_change_m = (written->translation() - e.estimate.t_b_c0).norm();
   return e;
 }
 

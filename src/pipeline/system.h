@@ -148,6 +148,9 @@ struct RunOptions {
 /// Throws InputError when System cannot run `config` (the rigs it runs: stereo + IMU); what
 /// its constructor refuses, for `info` to say before a run.
 void checkRunnable(const Config& config);
+/// Throws InputError when config.mode needs masks and the rig's cam0 (whose masks datasets
+/// hold) is its right camera.
+void checkMaskCamera(const Config& config);
 
 /// The whole per-frame system of one mode: front end (tracker + the mode's filter, IDY
 /// motion prior from the estimator's newest state), estimator, maps. One per sequence.
@@ -231,7 +234,8 @@ class System {
   void feedLoopCloser(const InFlight& f);  ///< the keyframe that left the window, with its image
   void finishLoops(Result& result);
 
-  Config config_;
+  Config config_;    ///< leftFirst of the config given
+  bool cam0_right_;  ///< the config's cam0 is the right camera: each frame's images swapped on arrival
   Mode mode_;
   RunOptions run_;
   struct Parts;  ///< the front end and the estimator (system.cpp: Ceres and OpenCV stay there)
