@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Fisheye end to end (issue "one camera + IMU, the fisheye lenses people fly"): the same scene and
-# trajectory rendered through the family's pinhole and through the two full-frame 150 deg fisheye
-# lenses of `simulate --lens` (Kannala-Brandt, MEI), 20 s streets of both families, no traffic and
+# trajectory rendered through the family's pinhole, the two full-frame 150 deg fisheye
+# lenses of `simulate --lens` (Kannala-Brandt, MEI) and the circular 185 deg one (kb185), 20 s
+# streets of both families, no traffic and
 # mid traffic; baseline and idy on each; ATE RMSE (SE3, whole file) and its ratio to the pinhole
 # render, and idy's moving / static flagged fractions (the dynamic classification).
 # Usage: bench/fisheye.sh IDYVINS WORK   (JOBS runs at a time, default 2; finished runs are kept)
@@ -17,7 +18,7 @@ jobs=(); names=()
 for s in "${SEQS[@]}"; do
   set -- $s
   for level in none mid; do
-    for lens in pinhole kb mei; do
+    for lens in pinhole kb mei kb185; do
       n=$1_$2_s${4}_${level}_$lens; S=$WORK/$n
       [ -f "$S/meta.json" ] || "$IDY" simulate --family "$1" --scene "$2" --level $level "${@:3}" --duration 20 \
         --lens $lens --out "$S" > /dev/null 2>&1
@@ -48,7 +49,7 @@ print("| sequence | lens | baseline | / pinhole | idy | / pinhole | idy: moving 
 print("| --- " * 8 + "|")
 for n in names:
     pb, pi = ate(n + "_pinhole.baseline"), ate(n + "_pinhole.idy")
-    for lens in ("pinhole", "kb", "mei"):
+    for lens in ("pinhole", "kb", "mei", "kb185"):
         b, i = ate("%s_%s.baseline" % (n, lens)), ate("%s_%s.idy" % (n, lens))
         mv, st = flagged("%s_%s.idy" % (n, lens))
         r = lambda a, ref: "x" if math.isnan(a) or math.isnan(ref) else "%.2fx" % (a / ref)

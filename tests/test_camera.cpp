@@ -219,6 +219,31 @@ TEST(KannalaBrandt, RaysBeyond90DegreesHaveNoNormalizedCoordinates) {
   EXPECT_TRUE(cam->liftToNormalized({400.0, 300.0}, xy));
 }
 
+TEST(KannalaBrandt, RaysPast90DegreesLiftToTheirUnitRayAndRoundTrip) {
+  // A 195° lens (the TUM-VI-like calibration above): every angle up to 110° round-trips
+  // project -> liftToRay to 1e-10; the normalized plane ends at 90°.
+  const auto cam = makeCamera(fisheye());
+  for (double deg = 0.0; deg <= 110.0; deg += 2.5)
+    for (double phi : {0.3, 2.0, -2.7}) {
+      const double t = deg * M_PI / 180.0;
+      const Eigen::Vector3d ray(std::sin(t) * std::cos(phi), std::sin(t) * std::sin(phi), std::cos(t));
+      Eigen::Vector2d uv, xy;
+      Eigen::Vector3d back;
+      ASSERT_TRUE(cam->project(ray, uv)) << deg;
+      ASSERT_TRUE(cam->liftToRay(uv, back)) << deg;
+      EXPECT_LT((back - ray).norm(), 1e-10) << deg;
+      EXPECT_NEAR(back.norm(), 1.0, 1e-12);
+      EXPECT_EQ(cam->liftToNormalized(uv, xy), deg < 90.0) << deg;
+    }
+  // A pinhole's ray is its normalized point made unit.
+  const auto pin = makeCamera(eurocCam0());
+  Eigen::Vector2d xy;
+  Eigen::Vector3d ray;
+  ASSERT_TRUE(pin->liftToNormalized({100.0, 50.0}, xy));
+  ASSERT_TRUE(pin->liftToRay({100.0, 50.0}, ray));
+  EXPECT_LT((ray - Eigen::Vector3d(xy.x(), xy.y(), 1.0).normalized()).norm(), 1e-15);
+}
+
 TEST(KannalaBrandt, EquidistantWithoutCoefficients) {
   CameraParams p = fisheye();
   p.dist = {0, 0, 0, 0};

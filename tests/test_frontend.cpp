@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 #include <set>
 
+#include "frontend/corner_detector.h"
 #include "frontend/feature_tracker.h"
 #include "frontend/patch_alignment.h"
 #include "frontend/track_quality.h"
@@ -315,6 +316,69 @@ TEST(FeatureTracker, KeepsMaxCountAndMinDistance) {
       too_close += (out.features[i].uv - out.features[j].uv).norm() < 29.0;
   EXPECT_EQ(too_close, 0u);
   for (const auto& f : out.features) EXPECT_NE(f.label, FeatureLabel::kEliminated);
+}
+
+TEST(FeatureTracker, ACircularFisheyeSees185DegreesAndNoCornerComesNearItsRim) {
+  // simulate --lens kb185: the lens circle 2 px inside the image's height, 92.5° at its rim,
+  // dark outside; rays past 90° are rendered (surfaces behind the camera's plane: depth < 0).
+  sim::SimOptions o = options("city", sim::Level::kNone, 0.5);
+  o.lens = sim::Lens::kKannalaBrandtCircle;
+  const sim::Scene scene(o);
+  const camera::CameraParams& k = scene.rig().cams[0];
+  const auto cam = camera::makeCamera(k);
+  Eigen::Vector3d ray;
+  const double rim = 0.5 * k.height - 2.0;
+  ASSERT_TRUE(cam->liftToRay({k.cx + rim, k.cy}, ray));
+  EXPECT_NEAR(std::acos(ray.z()) * 180.0 / M_PI, 92.5, 1e-6);
+  Eigen::Vector2d uv90;
+  ASSERT_TRUE(cam->project({1.0, 0.0, 1e-9}, uv90));
+  const double r90 = uv90.x() - k.cx;  // the normalized plane ends here
+  const sim::SceneFrame f = scene.renderFrame(3);
+  int outside = 0, dark = 0, behind = 0;
+  for (int v = 0; v < k.height; ++v)
+    for (int u = 0; u < k.width; ++u) {
+      const double r = std::hypot(u - k.cx, v - k.cy);
+      if (r > rim + 1.5) {
+        ++outside;
+        dark += f.cam[0].image.at<std::uint8_t>(v, u) < 35 && f.cam[0].depth.at<float>(v, u) == 0.f;
+      } else if (r > r90 + 1.0 && r < rim - 1.0) {
+        behind += f.cam[0].depth.at<float>(v, u) < 0.f;
+      }
+    }
+  EXPECT_EQ(dark, outside) << "nothing outside the lens circle";
+  EXPECT_GT(behind, 1000) << "the ground and facades beside the camera, past 90 degrees";
+  // The tracker's lens mask: corners at least corner_margin_px inside the max_ray_angle_deg circle.
+  const TrackerParams& params = scene.rig().tracker;
+  const double a = params.max_ray_angle_deg * M_PI / 180.0;
+  Eigen::Vector2d uv_max;
+  ASSERT_TRUE(cam->project({std::sin(a), 0.0, std::cos(a)}, uv_max));
+  const double r_max = uv_max.x() - k.cx;
+  const cv::Mat mask = lensMask(*cam, k.width, k.height, params.corner_margin_px, params.max_ray_angle_deg);
+  ASSERT_FALSE(mask.empty());
+  EXPECT_EQ(mask.at<std::uint8_t>(cvRound(k.cy), cvRound(k.cx + r_max - params.corner_margin_px - 2)), 255);
+  EXPECT_EQ(mask.at<std::uint8_t>(cvRound(k.cy), cvRound(k.cx + r_max - params.corner_margin_px + 2)), 0);
+  const cv::Mat plane = lensMask(*cam, k.width, k.height, params.corner_margin_px, 90.0);
+  EXPECT_EQ(plane.at<std::uint8_t>(cvRound(k.cy), cvRound(k.cx + r90 - params.corner_margin_px - 2)), 255);
+  EXPECT_EQ(plane.at<std::uint8_t>(cvRound(k.cy), cvRound(k.cx + r90 - params.corner_margin_px + 2)), 0);
+  FeatureTracker tracker(scene.rig().rig(), params);
+  FeatureFrame out;
+  std::size_t seen = 0;
+  for (std::size_t i = 0; i < 6; ++i) {
+    out = tracker.track(stereo(scene.renderFrame(i)), MotionPrior{}, nullptr);
+    for (const auto& ft : out.features) {
+      ++seen;
+      EXPECT_LT((ft.uv - Eigen::Vector2d(k.cx, k.cy)).norm(), r_max) << "within max_ray_angle_deg";
+    }
+  }
+  EXPECT_GE(out.features.size(), 60u);
+  EXPECT_GT(seen, 400u);
+  // Full-frame lenses and pinholes need no lens mask.
+  o.lens = sim::Lens::kKannalaBrandt;
+  const camera::CameraParams full = sim::rigConfig(o).cams[0];
+  EXPECT_TRUE(lensMask(*camera::makeCamera(full), full.width, full.height, 9, 80.0).empty()) << "75 degrees at most";
+  o.lens = sim::Lens::kPinhole;
+  const camera::CameraParams pin = sim::rigConfig(o).cams[0];
+  EXPECT_TRUE(lensMask(*camera::makeCamera(pin), pin.width, pin.height, 9, 80.0).empty());
 }
 
 /// Removes every tracked feature left of the image centre at one frame, nothing else.

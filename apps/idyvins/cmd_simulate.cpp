@@ -109,7 +109,7 @@ int simulateOne(const SimulateArgs& a, const std::string& scene, const std::stri
   if (!sim::parseFamily(a.family, o.family))
     throw CLI::ValidationError("--family", "expected standard|validation, got '" + a.family + "'");
   if (!sim::parseLens(a.lens, o.lens))
-    throw CLI::ValidationError("--lens", "expected pinhole|kb|mei, got '" + a.lens + "'");
+    throw CLI::ValidationError("--lens", "expected pinhole|kb|mei|kb185, got '" + a.lens + "'");
   if (!a.rig.empty()) {
     const sim::VinsRig* rig = sim::findVinsRig(a.rig);
     if (!rig) throw CLI::ValidationError("--rig", "expected one of " + sim::vinsRigNames() + ", got '" + a.rig + "'");
@@ -275,8 +275,9 @@ void registerSimulate(CLI::App& app, int& exit_code) {
   cmd->add_option("--lens", a->lens,
                   "pinhole (default): the family's lens; kb, mei: a full-frame fisheye of 150 deg across the\n"
                   "diagonal in both cameras (Kannala-Brandt, or MEI with xi 1.2), the same scene, trajectory\n"
-                  "and mounts, so a run compares with the pinhole render of the same seed")
-      ->check(CLI::IsMember({"pinhole", "kb", "mei"}));
+                  "and mounts, so a run compares with the pinhole render of the same seed; kb185: a circular\n"
+                  "Kannala-Brandt fisheye of 185 deg across its lens circle (inside the image, dark outside)")
+      ->check(CLI::IsMember({"pinhole", "kb", "mei", "kb185"}));
   addRigOption(cmd, *a);
   cmd->add_option("--td-ms", a->td_ms,
                   "camera-IMU time offset of the written data (ms): image stamps are the capture times on the\n"

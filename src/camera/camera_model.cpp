@@ -70,6 +70,9 @@ bool PinholeRadtan::liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d&
 
 // ---------------------------------------------------------------- Kannala-Brandt
 
+/// The widest ray a Kannala–Brandt lens images here (rad off the axis).
+constexpr double kMaxTheta = 0.5 * M_PI + 0.4;
+
 double KannalaBrandt::radius(double theta, double* d_r_d_theta) const {
   const double t2 = theta * theta;
   const auto& k = params_.dist;
@@ -86,7 +89,7 @@ bool KannalaBrandt::project(const Eigen::Vector3d& p_c, Eigen::Vector2d& uv,
   const double rho = std::sqrt(rho2);
   if (p_c.norm() < 1e-12) return false;
   const double theta = std::atan2(rho, z);
-  if (theta > 0.5 * M_PI + 0.4) return false;  // beyond the fisheye's useful field of view
+  if (theta > kMaxTheta) return false;  // beyond the fisheye's useful field of view
   double dr = 0;
   const double r = radius(theta, &dr);
   if (rho < 1e-12) {  // on the optical axis: r/ρ → 1/z
@@ -111,14 +114,8 @@ bool KannalaBrandt::project(const Eigen::Vector3d& p_c, Eigen::Vector2d& uv,
   return true;
 }
 
-bool KannalaBrandt::liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d& xy) const {
-  const Eigen::Vector2d m((uv.x() - params_.cx) / params_.fx, (uv.y() - params_.cy) / params_.fy);
-  const double r = m.norm();
-  if (r < 1e-15) {
-    xy.setZero();
-    return true;
-  }
-  double theta = r;  // Newton on radius(θ) = r
+bool KannalaBrandt::angleOf(double r, double& theta) const {
+  theta = r;  // Newton on radius(θ) = r
   bool converged = false;
   for (int it = 0; it < kMaxIterations; ++it) {
     double dr = 0;
@@ -130,7 +127,31 @@ bool KannalaBrandt::liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d&
     if (std::abs(dr) < 1e-12) return false;
     theta -= err / dr;
   }
-  if (!converged && std::abs(radius(theta) - r) > 1e-10) return false;
+  return converged || std::abs(radius(theta) - r) <= 1e-10;
+}
+
+bool KannalaBrandt::liftToRay(const Eigen::Vector2d& uv, Eigen::Vector3d& ray) const {
+  const Eigen::Vector2d m((uv.x() - params_.cx) / params_.fx, (uv.y() - params_.cy) / params_.fy);
+  const double r = m.norm();
+  double theta = 0;
+  if (r < 1e-15) {
+    ray = Eigen::Vector3d::UnitZ();
+    return true;
+  }
+  if (!angleOf(r, theta) || !(theta >= 0.0 && theta <= kMaxTheta)) return false;  // past the model's field of view
+  ray << std::sin(theta) / r * m, std::cos(theta);
+  return true;
+}
+
+bool KannalaBrandt::liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d& xy) const {
+  const Eigen::Vector2d m((uv.x() - params_.cx) / params_.fx, (uv.y() - params_.cy) / params_.fy);
+  const double r = m.norm();
+  if (r < 1e-15) {
+    xy.setZero();
+    return true;
+  }
+  double theta = 0;
+  if (!angleOf(r, theta)) return false;
   if (!(theta >= 0.0 && theta < 0.5 * M_PI - 1e-6)) return false;  // not in front of the camera
   xy = std::tan(theta) / r * m;
   return true;

@@ -25,6 +25,15 @@ class CameraModel {
   /// to 1e-10 or better; false if it does not converge or the ray is not in front.
   virtual bool liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d& xy) const = 0;
 
+  /// Lifts a pixel to its unit ray, also past 90° off the axis where the model images such rays
+  /// (a lens wider than 180°); false where liftToNormalized fails and the model has no such ray.
+  virtual bool liftToRay(const Eigen::Vector2d& uv, Eigen::Vector3d& ray) const {
+    Eigen::Vector2d xy;
+    if (!liftToNormalized(uv, xy)) return false;
+    ray = Eigen::Vector3d(xy.x(), xy.y(), 1.0).normalized();
+    return true;
+  }
+
   /// Distorted pixel of a normalized point (x/z, y/z) in front of the camera.
   bool projectNormalized(const Eigen::Vector2d& xy, Eigen::Vector2d& uv) const {
     return project(Eigen::Vector3d(xy.x(), xy.y(), 1.0), uv);
@@ -60,8 +69,14 @@ class KannalaBrandt final : public CameraModel {
   bool project(const Eigen::Vector3d& p_c, Eigen::Vector2d& uv,
                Eigen::Matrix<double, 2, 3>* d_uv_d_p = nullptr) const override;
   bool liftToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d& xy) const override;
+  /// θ up to project's limit (90° + 0.4 rad), so a 185° lens's rim too.
+  bool liftToRay(const Eigen::Vector2d& uv, Eigen::Vector3d& ray) const override;
   /// Distorted radius r(θ) and its derivative.
   double radius(double theta, double* d_r_d_theta = nullptr) const;
+
+ private:
+  /// θ with radius(θ) = r (Newton from θ = r); false when it does not converge.
+  bool angleOf(double r, double& theta) const;
 };
 
 /// Unified omnidirectional model (Mei 2007; camodocal MEI): the point goes onto the unit sphere,
@@ -77,6 +92,7 @@ class Mei final : public CameraModel {
   /// The ray of a pixel on the unit sphere (also behind the camera, z ≤ 0); false when the
   /// undistortion does not converge or the pixel is outside the model's image.
   bool liftToSphere(const Eigen::Vector2d& uv, Eigen::Vector3d& ray) const;
+  bool liftToRay(const Eigen::Vector2d& uv, Eigen::Vector3d& ray) const override { return liftToSphere(uv, ray); }
 };
 
 /// Builds the model the parameters name.

@@ -1,6 +1,7 @@
 #include "frontend/corner_detector.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -234,6 +235,24 @@ std::vector<cv::Point2f> detectCorners(const cv::Mat& image, const cv::Mat& mask
   // Threshold relative to the strongest response at an allowed pixel.
   const float threshold = static_cast<float>(static_cast<double>(strongestResponse(grid, eig)) * options.quality_level);
   return spreadOut(localMaxima(grid, eig, threshold), width, height, options);
+}
+
+cv::Mat lensMask(const camera::CameraModel& camera, int width, int height, int margin_px, double max_angle_deg) {
+  if (camera.params().type == camera::ModelType::kPinhole) return cv::Mat();  // no lens circle
+  cv::Mat mask(height, width, CV_8UC1);
+  const double max_tan = max_angle_deg < 90.0 ? std::tan(max_angle_deg * M_PI / 180.0) : HUGE_VAL;
+  bool every = true;
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      Eigen::Vector2d xy;
+      const bool in = camera.liftToNormalized(Eigen::Vector2d(u, v), xy) && xy.norm() <= max_tan;
+      mask.at<std::uint8_t>(v, u) = in ? 255 : 0;
+      every = every && in;
+    }
+  if (every) return cv::Mat();
+  if (margin_px > 0)
+    cv::erode(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * margin_px + 1, 2 * margin_px + 1)));
+  return mask;
 }
 
 }  // namespace idyvins::frontend

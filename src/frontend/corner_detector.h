@@ -12,6 +12,8 @@
 #include <opencv2/core/mat.hpp>
 #include <vector>
 
+#include "camera/camera_model.h"
+
 namespace idyvins::frontend {
 
 /// Options of detectCorners.
@@ -25,5 +27,12 @@ struct CornerOptions {
 /// Corners of a CV_8UC1 image at integer pixels, strongest first. `mask` (CV_8UC1,
 /// same size, non-zero = allowed) may be empty (whole image).
 std::vector<cv::Point2f> detectCorners(const cv::Mat& image, const cv::Mat& mask, const CornerOptions& options);
+
+/// Where a lens images rays in front of the camera within `max_angle_deg` of its axis: CV_8UC1 of
+/// width x height, 255 where a pixel lifts to the normalized plane (CameraModel::liftToNormalized)
+/// with a ray at most max_angle_deg off the axis (90 and above: any in front) and lies more than
+/// `margin_px` from every pixel that does not (a wide fisheye's rim, a lens circle's dark
+/// outside), 0 elsewhere. Empty for a pinhole and when every pixel passes: no mask needed.
+cv::Mat lensMask(const camera::CameraModel& camera, int width, int height, int margin_px, double max_angle_deg);
 
 }  // namespace idyvins::frontend

@@ -33,6 +33,7 @@ FeatureTracker::FeatureTracker(const camera::Rig& rig, const TrackerParams& para
   if (!rig.cams.empty()) {
     image_width_ = rig.cams[0].width;
     image_height_ = rig.cams[0].height;
+    lens_mask_ = lensMask(*cams_[0], image_width_, image_height_, params.corner_margin_px, params.max_ray_angle_deg);
   }
   if (rig.stereo()) {
     T_c1_c0_ = rig.T_b_c[1].inverse() * rig.T_b_c[0];
@@ -76,7 +77,8 @@ AlignOptions FeatureTracker::alignOptions() const {
 
 bool FeatureTracker::inBorder(const cv::Point2f& p) const {
   const int b = params_.border_px;
-  return p.x >= b && p.y >= b && p.x < image_width_ - b && p.y < image_height_ - b;
+  return p.x >= b && p.y >= b && p.x < image_width_ - b && p.y < image_height_ - b &&
+         (lens_mask_.empty() || lens_mask_.at<std::uint8_t>(cvRound(p.y), cvRound(p.x)) != 0);  // a fisheye's rim
 }
 
 void FeatureTracker::trackPrevious(const std::vector<cv::Mat>& pyr, const cv::Mat& image, std::vector<Track>& tracks,
@@ -250,7 +252,8 @@ void FeatureTracker::detectNew(const cv::Mat& image, std::vector<Track>& tracks,
   std::stable_sort(order.begin(), order.end(),
                    [&](std::size_t a, std::size_t b) { return tracks[a].length > tracks[b].length; });
   detect_mask_.create(image.size(), CV_8UC1);
-  detect_mask_.setTo(cv::Scalar(255));
+  if (!lens_mask_.empty()) detect_mask_.setTo(cv::Scalar(0));
+  detect_mask_.setTo(cv::Scalar(255), lens_mask_);  // an empty lens mask: the whole image
   cv::Mat& mask = detect_mask_;
   const int r = static_cast<int>(params_.min_dist);
   std::vector<Track> kept;
@@ -425,8 +428,7 @@ FeatureFrame FeatureTracker::track(const StereoFrame& input, const MotionPrior& 
 void FeatureTracker::buildPyramids(const StereoFrame& frame) {
   const cv::Size window(params_.klt_window, params_.klt_window);
   cv::buildOpticalFlowPyramid(frame.left, cur_pyr_, window, params_.klt_max_level);
-  // Right pyramid first: tracked features are matched in the right image before the
-  // filter (a filter may compare stereo observations of consecutive frames).
+  // Right pyramid first: tracked features are matched before the filter (it may compare stereo observations).
   has_right_image_ = !frame.right.empty() && cams_.size() >= 2;
   if (has_right_image_) {
     const cv::Mat right = params_.stereo_gain_compensation ? matchBrightness(frame.right, frame.left) : frame.right;

@@ -112,8 +112,8 @@ class FeatureTracker {
   /// stereo_refine: moves `uv_right` to where the left patch at `uv` aligns in the right
   /// image (full resolution), when that converges within 1 px of it.
   void refineRight(const cv::Mat& left, const Eigen::Vector2d& uv, cv::Point2f& uv_right) const;
-  bool inBorder(const cv::Point2f& p) const;
-  AlignOptions alignOptions() const;  ///< first-patch alignment with params_.patch_min_inside
+  bool inBorder(const cv::Point2f& p) const;  ///< border_px inside the image and inside lens_mask_
+  AlignOptions alignOptions() const;          ///< first-patch alignment with params_.patch_min_inside
 
   int image_width_ = 0, image_height_ = 0;
   TrackerParams params_;
@@ -127,6 +127,7 @@ class FeatureTracker {
   cv::Mat prev_left_;             ///< temporal_gain_compensation: the previous left image
   bool has_right_image_ = false;  ///< right_pyr_ holds the current frame's right image
   cv::Mat detect_mask_;
+  cv::Mat lens_mask_;  ///< lensMask of the left camera (empty: the whole image images the front)
   std::vector<Track> prev_tracks_;
   std::unordered_set<std::uint64_t> followed_;  ///< eliminated tracks still followed (follow_eliminated)
   TimeNs prev_t_ns_ = 0;

@@ -57,6 +57,11 @@ struct TrackerParams {
   double klt_epsilon = 0.01;  ///< ... or when the update is below this (px)
   double flow_back_px = 0.5;  ///< max forward-backward distance
   int border_px = 1;          ///< a track nearer the image border than this is dropped
+  /// Rays farther off the optical axis are neither detected nor tracked (lensMask). The
+  /// window's residuals live on the normalized plane, where a pixel's noise grows as 1/cos²θ
+  /// (33× at 80°, 130× at 85°): a circular 185° fisheye's rim costs more than it gives
+  /// (docs/results.md, "A circular 185° fisheye"). 90 and above: every ray in front.
+  double max_ray_angle_deg = 80.0;
 
   // First-patch alignment.
   /// After KLT, align each track's first-appearance patch (affine, gain/bias invariant) to
@@ -144,6 +149,9 @@ struct TrackerParams {
     v.param({"klt_epsilon", "px, update that stops KLT", ParamRule::kPositive}, klt_epsilon);
     v.param({"flow_back_px", "px, forward-backward distance", ParamRule::kPositive}, flow_back_px);
     v.param({"border_px", "px, tracks nearer the border are dropped", ParamRule::kNonNegative}, border_px);
+    v.param({"max_ray_angle_deg", "deg off the axis beyond which nothing is tracked (90: all in front)",
+             ParamRule::kPositive},
+            max_ray_angle_deg);
     v.section("Feature tracker: first-patch alignment");
     v.param({"align_first_patch", "0/1, align each track's first patch"}, align_first_patch);
     v.param({"patch_half", "px, patch of (2 half + 1)^2 pixels", ParamRule::kPositive}, patch_half);

@@ -28,22 +28,36 @@ std::vector<Vector3d> clipNear(const std::vector<Vector3d>& poly) {
 }
 }  // namespace
 
-Renderer::Renderer(const camera::CameraParams& params, const TextureBank& textures)
+Renderer::Renderer(const camera::CameraParams& params, const TextureBank& textures, double max_ray_angle_rad)
     : params_(params), model_(camera::makeCamera(params)), textures_(textures) {
   rays_.resize(static_cast<std::size_t>(params.width) * params.height);
+  const bool pinhole = params.type == camera::ModelType::kPinhole;
+  const Eigen::Vector3f none = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
   for (int v = 0; v < params.height; ++v)
     for (int u = 0; u < params.width; ++u) {
       Vector2d xy;
-      if (!model_->liftToNormalized(Vector2d(u, v), xy)) {
-        if (params.type == camera::ModelType::kPinhole)
-          throw std::runtime_error("renderer: camera model cannot lift every pixel");
-        xy.setConstant(std::numeric_limits<double>::quiet_NaN());  // behind the lens: dark
+      Vector3d ray;
+      Eigen::Vector3f& r = rays_[static_cast<std::size_t>(v) * params.width + u];
+      if (model_->liftToNormalized(Vector2d(u, v), xy)) {
+        r = std::atan(xy.norm()) <= max_ray_angle_rad ? Eigen::Vector3f(xy.x(), xy.y(), 1.0f) : none;
+      } else if (pinhole) {
+        throw std::runtime_error("renderer: camera model cannot lift every pixel");
+      } else if (model_->liftToRay(Vector2d(u, v), ray) &&
+                 std::acos(std::clamp(ray.z(), -1.0, 1.0)) <= max_ray_angle_rad) {
+        r = ray.cast<float>();  // past 90 degrees
+        past_90_deg_ = true;
+      } else {
+        r = none;  // outside the lens: dark
       }
-      rays_[static_cast<std::size_t>(v) * params.width + u] = xy.cast<float>();
-      if (params.type != camera::ModelType::kPinhole) continue;  // pixelBox projects the edges
+      if (!pinhole) continue;  // pixelBox projects the edges
       const Vector2d pin(params.fx * xy.x() + params.cx, params.fy * xy.y() + params.cy);
       max_distortion_px_ = std::max(max_distortion_px_, (pin - Vector2d(u, v)).norm());
     }
+  // Past 90 degrees every ray is a unit one, so the near test is on distance: near 90 degrees
+  // a surface's depth goes to 0 (the ground beside the camera would be cut off as too near).
+  if (past_90_deg_)
+    for (Eigen::Vector3f& r : rays_)
+      if (r.allFinite()) r.normalize();
 }
 
 RenderOutput Renderer::render(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c, bool sky,
@@ -120,7 +134,8 @@ Renderer::Hits Renderer::rasterize(const std::vector<Quad>& quads, const Eigen::
     const Vector3d n = u.cross(v);
     const double n_dot_o = n.dot(o);
     if (!q.two_sided && n_dot_o >= 0) continue;  // back face (camera behind the plane)
-    const std::vector<Vector3d> poly = clipNear({o, o + u * q.width, o + u * q.width + v * q.height, o + v * q.height});
+    const std::vector<Vector3d> corners = {o, o + u * q.width, o + u * q.width + v * q.height, o + v * q.height};
+    const std::vector<Vector3d> poly = past_90_deg_ ? corners : clipNear(corners);
     if (poly.size() < 3) continue;
     int u0, u1, v0, v1;
     pixelBox(poly, margin, u0, u1, v0, v1);
@@ -128,11 +143,11 @@ Renderer::Hits Renderer::rasterize(const std::vector<Quad>& quads, const Eigen::
     for (int py = v0; py <= v1; ++py) {
       for (int px = u0; px <= u1; ++px) {
         const std::size_t idx = static_cast<std::size_t>(py) * W + px;
-        const Eigen::Vector2f& r = rays_[idx];
-        const Vector3d d(r.x(), r.y(), 1.0);
+        const Eigen::Vector3f& r = rays_[idx];
+        const Vector3d d = r.cast<double>();
         const double n_dot_d = n.dot(d);
         if (std::abs(n_dot_d) < 1e-12 || !r.allFinite()) continue;  // no ray: outside the lens
-        const double z = n_dot_o / n_dot_d;                         // d.z = 1, so the ray parameter is the depth
+        const double z = n_dot_o / n_dot_d;                         // the ray parameter: the depth where d.z = 1
         if (z < kNear || z >= zbuf[idx]) continue;
         const Vector3d rel = d * z - o;
         const double s = rel.dot(u), t = rel.dot(v);
@@ -165,8 +180,8 @@ RenderOutput Renderer::shade(const std::vector<Quad>& quads, const Hits& h, bool
     for (int px = 0; px < W; ++px) {
       const std::size_t idx = static_cast<std::size_t>(py) * W + px;
       float value;
-      if (hit[idx] < 0) {
-        value = sky ? 215.0f - 25.0f * static_cast<float>(py) / H : 20.0f;
+      if (hit[idx] < 0) {  // the sky, or dark outside the lens
+        value = sky && rays_[idx].allFinite() ? 215.0f - 25.0f * static_cast<float>(py) / H : 20.0f;
       } else {
         const Quad& q = quads[hit[idx]];
         const float tex = textures_.sample(q.texture, hs[idx] + q.tex_offset_s, ht[idx] + q.tex_offset_t, hfoot[idx]);
@@ -177,7 +192,7 @@ RenderOutput Renderer::shade(const std::vector<Quad>& quads, const Hits& h, bool
           value = q.albedo * (mean + q.contrast * (tex - mean));
         }
         msk[px] = q.object_id;
-        dep[px] = zbuf[idx];
+        dep[px] = zbuf[idx] * rays_[idx].z();
       }
       img[px] = value;
     }

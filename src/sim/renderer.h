@@ -4,6 +4,7 @@
 // shaded from mipmapped textures by their footprint. Deterministic.
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstdint>
 #include <opencv2/core/mat.hpp>
 #include <vector>
@@ -18,13 +19,15 @@ namespace idyvins::sim {
 struct RenderOutput {
   cv::Mat image;  ///< CV_8UC1 intensity (renderRadiance: CV_32F)
   cv::Mat mask;   ///< CV_8UC1 object id (0 static, k moving object k)
-  cv::Mat depth;  ///< CV_32F z in the camera frame (0 = sky)
+  cv::Mat depth;  ///< CV_32F z in the camera frame (0 = sky; below 0 past 90° off the axis)
 };
 
 /// Renders one camera. Holds a per-pixel ray table; const methods are thread-safe.
 class Renderer {
  public:
-  Renderer(const camera::CameraParams& params, const TextureBank& textures);
+  /// Rays more than `max_ray_angle_rad` off the axis see nothing (dark): a circular fisheye's
+  /// lens circle. Rays past 90° are rendered where the lens model images them.
+  Renderer(const camera::CameraParams& params, const TextureBank& textures, double max_ray_angle_rad = M_PI);
   /// Renders quads seen from T_w_c (camera pose in the world). `noise_sigma` adds
   /// Gaussian pixel noise drawn from `noise_seed`.
   RenderOutput render(const std::vector<Quad>& quads, const Eigen::Isometry3d& T_w_c, bool sky, double noise_sigma,
@@ -52,8 +55,11 @@ class Renderer {
   camera::CameraParams params_;
   std::unique_ptr<camera::CameraModel> model_;
   const TextureBank& textures_;
-  std::vector<Eigen::Vector2f> rays_;  ///< normalized (x/z, y/z) per pixel
-  double max_distortion_px_ = 0;       ///< max |distorted − pinhole| pixel shift in the image
+  /// Per pixel: (x/z, y/z, 1), whose ray parameter at a hit is its depth; the unit ray, whose
+  /// parameter is the distance, for every pixel of a lens that sees past 90°; NaN outside the lens.
+  std::vector<Eigen::Vector3f> rays_;
+  bool past_90_deg_ = false;      ///< some rays look behind the camera's plane (no near clipping then)
+  double max_distortion_px_ = 0;  ///< max |distorted − pinhole| pixel shift in the image
 };
 
 }  // namespace idyvins::sim

@@ -55,6 +55,8 @@ bool parseLens(const std::string& text, Lens& lens) {
     lens = Lens::kKannalaBrandt;
   else if (text == "mei")
     lens = Lens::kMei;
+  else if (text == "kb185")
+    lens = Lens::kKannalaBrandtCircle;
   else
     return false;
   return true;
@@ -66,6 +68,8 @@ const char* toString(Lens lens) {
       return "kb";
     case Lens::kMei:
       return "mei";
+    case Lens::kKannalaBrandtCircle:
+      return "kb185";
     case Lens::kPinhole:
       break;
   }
@@ -102,10 +106,12 @@ void validationRig(Config& c) {
 }
 
 /// The fisheye lens in place of the pinhole: the same principal point, the focal scale chosen
-/// so that the half diagonal images kFisheyeDiagonalFovDeg / 2 off the axis.
+/// so that the half diagonal images kFisheyeDiagonalFovDeg / 2 off the axis (the circular lens:
+/// its lens circle, 2 px inside the image's shorter side, kCircleFovDeg / 2).
 void fisheyeLens(camera::CameraParams& p, Lens lens) {
-  const double half_diagonal = 0.5 * std::hypot(p.width, p.height);
-  const double theta = 0.5 * kFisheyeDiagonalFovDeg * M_PI / 180.0;
+  const bool circle = lens == Lens::kKannalaBrandtCircle;
+  const double half_diagonal = circle ? 0.5 * std::min(p.width, p.height) - 2.0 : 0.5 * std::hypot(p.width, p.height);
+  const double theta = 0.5 * (circle ? kCircleFovDeg : kFisheyeDiagonalFovDeg) * M_PI / 180.0;
   p.type = lens == Lens::kMei ? camera::ModelType::kMei : camera::ModelType::kKannalaBrandt;
   if (lens == Lens::kMei) {
     p.xi = 1.2;
@@ -373,7 +379,7 @@ Scene::Scene(const SimOptions& o)
     cams_[c] = rig_.cams[c];
     cams_[c].width = rig_.image_width;
     cams_[c].height = rig_.image_height;
-    renderers_.emplace_back(cams_[c], textures_);
+    renderers_.emplace_back(cams_[c], textures_, lensHalfFovRad(o.lens));
   }
   if (!o.vins_rig.empty()) {
     // The family's cam0 keeps its path; the rig's body is where its mount puts it.

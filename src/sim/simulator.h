@@ -2,6 +2,7 @@
 // `idyvins simulate`: writes a complete EuRoC-layout dataset of a rendered dynamic
 // scene with ground truth, masks, a VINS-Fusion config and meta.json.
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -36,15 +37,22 @@ enum class Family { kStandard, kValidation };
 bool parseFamily(const std::string& text, Family& family);
 const char* toString(Family family);
 
-/// The cameras' lens: the family's pinhole, or a full-frame fisheye of 150° across the
-/// image diagonal (both cameras, the family's principal points, the same mounts):
-/// Kannala–Brandt (equidistant with small k2 k3) or MEI (ξ 1.2, small k1 k2).
-enum class Lens { kPinhole, kKannalaBrandt, kMei };
-/// "pinhole", "kb" or "mei".
+/// The cameras' lens: the family's pinhole, a full-frame fisheye of 150° across the image
+/// diagonal (both cameras, the family's principal points, the same mounts): Kannala–Brandt
+/// (equidistant with small k2 k3) or MEI (ξ 1.2, small k1 k2); or a circular Kannala–Brandt
+/// fisheye of 185° across its lens circle, dark outside it.
+enum class Lens { kPinhole, kKannalaBrandt, kMei, kKannalaBrandtCircle };
+/// "pinhole", "kb", "mei" or "kb185".
 bool parseLens(const std::string& text, Lens& lens);
 const char* toString(Lens lens);
-/// The diagonal field of view of the fisheye lenses (degrees).
+/// The diagonal field of view of the full-frame fisheye lenses (degrees).
 constexpr double kFisheyeDiagonalFovDeg = 150.0;
+/// The circular lens's field of view across its lens circle (degrees).
+constexpr double kCircleFovDeg = 185.0;
+/// Half the lens's field of view where the lens has a circle (rad); π otherwise.
+inline double lensHalfFovRad(Lens lens) {
+  return lens == Lens::kKannalaBrandtCircle ? 0.5 * kCircleFovDeg * M_PI / 180.0 : M_PI;
+}
 
 /// Everything `simulate` needs.
 struct SimOptions {
