@@ -172,8 +172,10 @@ cv::Mat loadGrayImage(const ImageRecord& record, const std::string& csv_path, in
     throw InputError(csv_path, record.csv_line, "image file missing: " + record.path);
   // Read here and decoded from memory: a PNG cut short (no IEND chunk at its end) is refused
   // with one line before libpng would print its own.
-  std::ifstream file(record.path, std::ios::binary);
-  const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  std::ifstream file(record.path, std::ios::binary | std::ios::ate);  // one read of the whole file
+  std::vector<unsigned char> bytes(file ? static_cast<std::size_t>(file.tellg()) : 0);
+  if (!file.seekg(0) || !file.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())))
+    throw InputError(csv_path, record.csv_line, "image file unreadable: " + record.path);
   static const unsigned char kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   static const unsigned char kIend[8] = {'I', 'E', 'N', 'D', 0xae, 0x42, 0x60, 0x82};
   if (bytes.size() >= 8 && std::equal(kPngSignature, kPngSignature + 8, bytes.begin()) &&
