@@ -22,10 +22,12 @@
 namespace ceres {
 class CostFunction;
 class LossFunction;
-class Problem;
 }  // namespace ceres
 
 namespace idyvins::backend {
+
+class WindowProblem;
+struct WindowSolverSummary;
 
 /// Below this speed (m/s) of the oldest window frame the time offset is held, not estimated.
 constexpr double kMinSpeedForTd = 0.2;
@@ -116,16 +118,16 @@ class Estimator {
   /// The window's Ceres solve: state, prior, IMU and projection factors; gauge restored.
   void optimize(FrameResult& result);
   /// Returns the number of blocks left out (not finite at their start values).
-  int addStateAndImu(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
+  int addStateAndImu(WindowProblem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
   /// Whether the segment being initialized starts from the last good state's biases (tied to
   /// them): after a failure whose last good state came after its own segment's first-window
   /// transient (kSettledFrames); else from the first start's (zero ba, the alignment's bg).
   bool biasesFromLastGood() const;
   /// The bias prior of the first window after a failure (bias_anchor_), while there is no
   /// marginalization prior.
-  void addBiasAnchor(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
+  void addBiasAnchor(WindowProblem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
   /// Projection factors of the usable landmarks (candidates weighted); returns how many.
-  int addProjections(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
+  int addProjections(WindowProblem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
                      ceres::LossFunction& huber, std::deque<CandidateWeight>& weights, int& candidates);
   /// The blocks of a landmark's projection factor for `frame` (-1: its stereo factor in the
   /// anchor frame), T_b_c0 after the poses when estimatesExtrinsic(), the td block last when `with_td`.
@@ -136,7 +138,7 @@ class Estimator {
   ExtrinsicUse extrinsicUse() const { return {estimatesExtrinsic(), ex_.T_c0_c1}; }
   /// estimate_extrinsic: the T_b_c0 block and its prior into the solve, opened once the window is
   /// initialized and moving (kMinSpeedForTd), held constant while it is slow.
-  void addExtrinsic(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
+  void addExtrinsic(WindowProblem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs);
   /// After a solve: the rig's extrinsics from the block (the stereo pair rigid).
   void storeExtrinsic();
   ExtrinsicEstimate extrinsicEstimate() const;
@@ -172,7 +174,7 @@ class Estimator {
   /// Across an IMU gap (bridge_imu_gaps): the sb blocks (speed, biases) no IMU factor or prior
   /// reaches are held constant; the first frame an IMU factor reaches again after a gap keeps the
   /// biases carried across it within the gap's random walk (a bias prior).
-  void holdSpeedBiasesAcrossGaps(ceres::Problem& problem,
+  void holdSpeedBiasesAcrossGaps(WindowProblem& problem,
                                  std::vector<std::shared_ptr<ceres::CostFunction>>& costs) const;
   /// Frames that entered without an IMU factor and whose speed no IMU factor reaches: their
   /// velocity from the positions around them (what the IMU factors resume from).
@@ -181,6 +183,7 @@ class Estimator {
   /// last good state propagated to its oldest frame. Returns how (FrameResult::reanchored).
   std::string reanchor();
   /// True when the block's residual (and the parameters it is evaluated at) are finite.
+  void solveWithCeres(const WindowProblem& window, std::deque<CandidateWeight>& weights, SolveProfile& p) const;
   static bool finiteAt(const ceres::CostFunction& cost, const std::vector<double*>& blocks);
   void slide(bool keyframe);
   void marginalizeOldest();

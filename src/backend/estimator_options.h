@@ -20,6 +20,9 @@ struct EstimatorOptions {
   /// A solve has converged when an iteration lowers the cost by less than this fraction of
   /// it (Ceres' own default is 1e-6; docs/results.md has the measurement behind the value).
   double function_tolerance = 1e-4;
+  /// The window's own solver (window_problem.h: Ceres' dogleg restated, landmarks eliminated one
+  /// at a time) or Ceres itself on the same problem.
+  bool window_solver = true;
 
   // Camera–IMU time offset (VINS-Fusion's keys): image stamp + td = IMU time.
   bool estimate_td = false;  ///< estimate td online in the window (DESIGN §4.11)
@@ -136,6 +139,8 @@ struct EstimatorOptions {
     v.param({"solver_time_limit", "0/1, cap solves at max_solver_time (results depend on load)"}, time_limited);
     v.param({"solver_function_tolerance", "relative cost decrease of convergence", ParamRule::kPositive},
             function_tolerance);
+    v.param({"window_solver", "0/1, the window's own Schur-complement solver (1) or Ceres (0), the same method"},
+            window_solver);
     declareCalibrationParams(v);
     v.section("Sliding-window measurement model");
     v.param({"projection_sigma_px", "px, pixel noise of projection factors", ParamRule::kPositive}, sigma_px);

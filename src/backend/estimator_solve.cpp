@@ -13,6 +13,7 @@
 #include "backend/imu_factor.h"
 #include "backend/landmark_factors.h"
 #include "backend/parameter_blocks.h"
+#include "backend/window_problem.h"
 #include "dynamic/dynamic.h"
 
 namespace idyvins::backend {
@@ -28,19 +29,58 @@ const PoseManifold kPoseManifold;
 
 void Estimator::optimize(FrameResult& r) {
   const auto start = std::chrono::steady_clock::now();
-  ceres::Problem problem(borrowingProblemOptions());
+  WindowProblem problem;
   std::vector<std::shared_ptr<ceres::CostFunction>> costs;  // owned here, borrowed by the problem
   ceres::HuberLoss huber(options_.huber_px);
   r.skipped_blocks = addStateAndImu(problem, costs);
-  // Candidate weights 1/m_j (DESIGN §4.5), owned here, refreshed by the iteration callback below.
+  // Candidate weights 1/m_j (DESIGN §4.5), owned here, refreshed after every iteration.
   std::deque<CandidateWeight> weights;
   addExtrinsic(problem, costs);
   r.landmarks = addProjections(problem, costs, huber, weights, r.candidates);
   holdSpeedBiasesAcrossGaps(problem, costs);
   // The offset, observable only in motion, is held while the oldest frame is slow (as VINS-Fusion).
-  if (estimatesTd() && problem.HasParameterBlock(&w_.td_s) && w_.frames[0].nav().v_w.norm() < kMinSpeedForTd)
-    problem.SetParameterBlockConstant(&w_.td_s);
+  if (estimatesTd() && problem.hasParameterBlock(&w_.td_s) && w_.frames[0].nav().v_w.norm() < kMinSpeedForTd)
+    problem.setParameterBlockConstant(&w_.td_s);
   refreshWeights(weights);
+  const Isometry3d T_w_b0_before = w_.frames[0].T_w_b();
+  const auto solve_start = std::chrono::steady_clock::now();
+  SolveProfile& p = r.solve;
+  if (options_.window_solver) {
+    WindowSolverOptions o;
+    if (!weights.empty()) o.after_iteration = [&] { refreshWeights(weights); };
+    o.max_num_iterations = options_.max_num_iterations;
+    o.function_tolerance = options_.function_tolerance;
+    if (options_.time_limited) o.max_solver_time_s = options_.max_solver_time_s;  // live only
+    const WindowSolverSummary s = solveWindow(problem, o);
+    p.preprocess_ms = s.preprocess_ms;
+    p.residual_ms = s.residual_ms;
+    p.jacobian_ms = s.jacobian_ms;
+    p.linear_solver_ms = s.linear_solver_ms;
+    p.minimizer_ms = s.minimizer_ms;
+    p.iterations = 1 + s.successful_steps + s.unsuccessful_steps;  // as Ceres: iteration 0 counts as a step
+    p.converged = s.converged;
+  } else {
+    solveWithCeres(problem, weights, p);
+  }
+  const auto post_start = std::chrono::steady_clock::now();
+  storeSolved();
+  if (options_.fix_gauge && options_.use_imu) restoreGauge(T_w_b0_before);  // imu: 0 holds frame 0 itself
+  velocitiesFromPositions();
+  for (int i = 1; i <= w_.count; ++i) {
+    const imu::NavState s = w_.frames[i - 1].nav();
+    if (w_.frames[i].pre && w_.frames[i].pre->needsRepropagation(s.ba, s.bg)) w_.frames[i].pre->repropagate(s.ba, s.bg);
+  }
+  const auto end = std::chrono::steady_clock::now();
+  using Ms = std::chrono::duration<double, std::milli>;
+  r.optimization_ms = Ms(end - start).count();
+  p.build_ms = Ms(solve_start - start).count();
+  p.post_ms = Ms(end - post_start).count();
+}
+
+void Estimator::solveWithCeres(const WindowProblem& window, std::deque<CandidateWeight>& weights,
+                               SolveProfile& p) const {
+  ceres::Problem problem(borrowingProblemOptions());
+  window.toCeres(problem);
   struct Refresh : ceres::IterationCallback {
     std::function<void()> f;
     ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
@@ -60,24 +100,8 @@ void Estimator::optimize(FrameResult& r) {
   o.function_tolerance = options_.function_tolerance;
   if (options_.time_limited) o.max_solver_time_in_seconds = options_.max_solver_time_s;  // live only
   o.num_threads = 1;                                                                     // deterministic
-  const Isometry3d T_w_b0_before = w_.frames[0].T_w_b();
-  const auto solve_start = std::chrono::steady_clock::now();
   ceres::Solver::Summary summary;
   ceres::Solve(o, &problem, &summary);
-  const auto post_start = std::chrono::steady_clock::now();
-  storeSolved();
-  if (options_.fix_gauge && options_.use_imu) restoreGauge(T_w_b0_before);  // imu: 0 holds frame 0 itself
-  velocitiesFromPositions();
-  for (int i = 1; i <= w_.count; ++i) {
-    const imu::NavState s = w_.frames[i - 1].nav();
-    if (w_.frames[i].pre && w_.frames[i].pre->needsRepropagation(s.ba, s.bg)) w_.frames[i].pre->repropagate(s.ba, s.bg);
-  }
-  const auto end = std::chrono::steady_clock::now();
-  using Ms = std::chrono::duration<double, std::milli>;
-  r.optimization_ms = Ms(end - start).count();
-  SolveProfile& p = r.solve;
-  p.build_ms = Ms(solve_start - start).count();
-  p.post_ms = Ms(end - post_start).count();
   p.preprocess_ms = 1e3 * summary.preprocessor_time_in_seconds;
   p.residual_ms = 1e3 * summary.residual_evaluation_time_in_seconds;
   p.jacobian_ms = 1e3 * summary.jacobian_evaluation_time_in_seconds;
@@ -87,7 +111,7 @@ void Estimator::optimize(FrameResult& r) {
   p.converged = summary.termination_type == ceres::CONVERGENCE;
 }
 
-void Estimator::addExtrinsic(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
+void Estimator::addExtrinsic(WindowProblem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
   if (options_.estimate_extrinsic == 0 || !options_.use_imu) return;
   const bool moving = w_.frames[0].nav().v_w.norm() >= kMinSpeedForTd;
   if (!ex_.open) {
@@ -95,11 +119,11 @@ void Estimator::addExtrinsic(ceres::Problem& problem, std::vector<std::shared_pt
     ex_.open = true;
     setPose(rig_.T_b_c0.t_b_c, rig_.T_b_c0.q_b_c, ex_.block.data());
   }
-  problem.AddParameterBlock(ex_.block.data(), kPoseSize, const_cast<PoseManifold*>(&kPoseManifold));
+  problem.addParameterBlock(ex_.block.data(), kPoseSize, &kPoseManifold);
   costs.push_back(std::make_shared<PosePriorFactor>(ex_.start, options_.extrinsic_prior_m,
                                                     options_.extrinsic_prior_deg * M_PI / 180.0));
-  problem.AddResidualBlock(costs.back().get(), nullptr, ex_.block.data());
-  if (!moving) problem.SetParameterBlockConstant(ex_.block.data());  // as the offset: observable in motion only
+  problem.addResidualBlock(costs.back().get(), nullptr, ex_.block.data());
+  if (!moving) problem.setParameterBlockConstant(ex_.block.data());  // as the offset: observable in motion only
 }
 
 void Estimator::storeExtrinsic() {
@@ -121,7 +145,7 @@ ExtrinsicEstimate Estimator::extrinsicEstimate() const {
   return e;
 }
 
-void Estimator::holdSpeedBiasesAcrossGaps(ceres::Problem& problem,
+void Estimator::holdSpeedBiasesAcrossGaps(WindowProblem& problem,
                                           std::vector<std::shared_ptr<ceres::CostFunction>>& costs) const {
   const auto imu_in = [&](int i) { return i >= 1 && w_.frames[i].pre && w_.frames[i].pre->sumDt() <= 10.0; };
   std::vector<bool> in_prior(static_cast<std::size_t>(w_.count + 1), false);
@@ -133,8 +157,8 @@ void Estimator::holdSpeedBiasesAcrossGaps(ceres::Problem& problem,
     if (imu_in(i) || in_prior[i]) continue;  // an IMU factor into the frame, or the prior, holds its biases
     double* sb = const_cast<double*>(w_.frames[i].sb.data());  // the problem holds blocks as mutable
     if (!(i < w_.count && imu_in(i + 1))) {  // no IMU factor at all: speed and biases carried as they are
-      if (problem.HasParameterBlock(sb) && !(i == 0 && seg_.bias_anchor && options_.use_imu))
-        problem.SetParameterBlockConstant(sb);
+      if (problem.hasParameterBlock(sb) && !(i == 0 && seg_.bias_anchor && options_.use_imu))
+        problem.setParameterBlockConstant(sb);
       continue;
     }
     if (i == 0 && !w_.prior) continue;  // the window's first frame: free, or tied by the bias anchor (as before)
@@ -146,7 +170,7 @@ void Estimator::holdSpeedBiasesAcrossGaps(ceres::Problem& problem,
     const imu::NavState s = w_.frames[i].nav();
     costs.push_back(std::make_shared<BiasPriorFactor>(s.ba, s.bg, std::max(1e-3, noise_.acc_w * std::sqrt(gap_s)),
                                                       std::max(1e-5, noise_.gyr_w * std::sqrt(gap_s))));
-    problem.AddResidualBlock(costs.back().get(), nullptr, sb);
+    problem.addResidualBlock(costs.back().get(), nullptr, sb);
   }
 }
 
@@ -169,19 +193,19 @@ bool Estimator::finiteAt(const ceres::CostFunction& cost, const std::vector<doub
   return true;
 }
 
-int Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
+int Estimator::addStateAndImu(WindowProblem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
   int skipped = 0;
   for (int i = 0; i <= w_.count; ++i) {
-    problem.AddParameterBlock(w_.frames[i].pose.data(), 7, const_cast<PoseManifold*>(&kPoseManifold));
-    problem.AddParameterBlock(w_.frames[i].sb.data(), 9);
+    problem.addParameterBlock(w_.frames[i].pose.data(), 7, &kPoseManifold);
+    problem.addParameterBlock(w_.frames[i].sb.data(), 9);
   }
-  if (!options_.use_imu) problem.SetParameterBlockConstant(w_.frames[0].pose.data());  // the gauge, as VINS-Fusion
+  if (!options_.use_imu) problem.setParameterBlockConstant(w_.frames[0].pose.data());  // the gauge, as VINS-Fusion
   // Every block is evaluated once before it enters the problem: one that is not finite at
   // the start values (a degenerate integration, a prior gone bad) is left out and counted.
   if (w_.prior) {
     costs.push_back(std::make_shared<MarginalizationFactor>(w_.prior));
     if (finiteAt(*costs.back(), w_.prior->blocks))
-      problem.AddResidualBlock(costs.back().get(), nullptr, w_.prior->blocks);
+      problem.addResidualBlock(costs.back().get(), nullptr, w_.prior->blocks);
     else
       ++skipped;
   }
@@ -192,19 +216,19 @@ int Estimator::addStateAndImu(ceres::Problem& problem, std::vector<std::shared_p
     const std::vector<double*> blocks{w_.frames[i - 1].pose.data(), w_.frames[i - 1].sb.data(),
                                       w_.frames[i].pose.data(), w_.frames[i].sb.data()};
     if (finiteAt(*costs.back(), blocks))
-      problem.AddResidualBlock(costs.back().get(), nullptr, blocks);
+      problem.addResidualBlock(costs.back().get(), nullptr, blocks);
     else
       ++skipped;
   }
   return skipped;
 }
 
-void Estimator::addBiasAnchor(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
+void Estimator::addBiasAnchor(WindowProblem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs) {
   if (w_.prior) seg_.bias_anchor.reset();  // the window has its own prior now
   if (!seg_.bias_anchor || !options_.use_imu) return;
   costs.push_back(std::make_shared<BiasPriorFactor>(seg_.bias_anchor->head<3>(), seg_.bias_anchor->tail<3>(),
                                                     options_.reset_bias_prior_acc, options_.reset_bias_prior_gyr));
-  problem.AddResidualBlock(costs.back().get(), nullptr, w_.frames[0].sb.data());
+  problem.addResidualBlock(costs.back().get(), nullptr, w_.frames[0].sb.data());
 }
 
 std::vector<double*> Estimator::factorBlocks(Landmark& lm, int frame, bool with_td) {
@@ -221,7 +245,7 @@ std::vector<double*> Estimator::factorBlocks(Landmark& lm, int frame, bool with_
   return blocks;
 }
 
-int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
+int Estimator::addProjections(WindowProblem& problem, std::vector<std::shared_ptr<ceres::CostFunction>>& costs,
                               ceres::LossFunction& huber, std::deque<CandidateWeight>& weights, int& candidates) {
   const ProjectionWeight w{rig_.focal_px, options_.sigma_px, nullptr};
   int used = 0;
@@ -240,8 +264,10 @@ int Estimator::addProjections(ceres::Problem& problem, std::vector<std::shared_p
     for (const auto& lf : landmarkFactors(lm, rig_, w, TdUse{estimatesTd(), std::nullopt}, scale_of_frame,
                                           estimatesRays(), extrinsicUse())) {
       costs.push_back(lf.cost);
-      problem.AddResidualBlock(lf.cost.get(), &huber, factorBlocks(lm, lf.frame, estimatesTd()));
+      problem.addResidualBlock(lf.cost.get(), &huber, factorBlocks(lm, lf.frame, estimatesTd()));
     }
+    const double* block = estimatesRays() ? lm.ray_block.data() : &lm.inv_depth;
+    if (problem.hasParameterBlock(block)) problem.setLandmark(block);
   }
   return used;
 }
