@@ -220,5 +220,30 @@ TEST(WindowSolver, RefusesAResidualWithTwoLandmarks) {
   EXPECT_THROW(solveWindow(p, WindowSolverOptions{}), std::invalid_argument);
 }
 
+TEST(WindowSolver, ABlockAddedByAResidualTakesTheManifoldGivenLater) {
+  StereoWindow w(false, 4);
+  WindowProblem p;
+  p.addResidualBlock(w.costs[1].get(), nullptr, {w.poses[0].data(), w.poses[1].data(), &w.inv_depth[0]});
+  ASSERT_EQ(p.blocks()[1].manifold, nullptr);
+  p.addParameterBlock(w.poses[1].data(), 7, &w.manifold);
+  EXPECT_EQ(p.blocks()[1].manifold, &w.manifold);
+  ceres::Problem problem(borrowingProblemOptions());
+  p.toCeres(problem);
+  EXPECT_EQ(problem.GetManifold(w.poses[1].data()), &w.manifold);
+  EXPECT_EQ(problem.GetManifold(w.poses[0].data()), nullptr);
+}
+
+TEST(WindowSolver, LeavesAProblemWithEveryBlockConstantAsItIs) {
+  StereoWindow w(false, 5);
+  WindowProblem p = w.problem(false);
+  for (const auto& b : p.blocks()) p.setParameterBlockConstant(b.x);
+  const std::vector<double> before = w.state();
+  const WindowSolverSummary s = solveWindow(p, WindowSolverOptions{});
+  EXPECT_TRUE(s.usable);
+  EXPECT_TRUE(s.converged);
+  EXPECT_EQ(s.successful_steps + s.unsuccessful_steps, 0);
+  EXPECT_EQ(w.state(), before);
+}
+
 }  // namespace
 }  // namespace idyvins::backend

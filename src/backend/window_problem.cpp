@@ -7,7 +7,15 @@
 namespace idyvins::backend {
 
 void WindowProblem::addParameterBlock(double* x, int size, const ceres::Manifold* manifold) {
-  if (index_.count(x)) return;
+  const auto it = index_.find(x);
+  if (it != index_.end()) {  // added before (by a residual block): as Ceres, the manifold given now holds
+    Block& b = blocks_[static_cast<std::size_t>(it->second)];
+    if (b.size != size)
+      throw std::invalid_argument("addParameterBlock: a block's size differs from the one it was added with");
+    if (manifold) b.manifold = manifold;
+    log_.emplace_back(Op::kBlock, it->second);
+    return;
+  }
   index_.emplace(x, static_cast<int>(blocks_.size()));
   log_.emplace_back(Op::kBlock, static_cast<int>(blocks_.size()));
   blocks_.push_back({x, size, manifold});

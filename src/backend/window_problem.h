@@ -48,7 +48,8 @@ struct WindowSolverSummary {
 
 class WindowProblem {
  public:
-  /// A block of `size` doubles at x, with its manifold (null: Euclidean); a second call is ignored.
+  /// A block of `size` doubles at x, with its manifold (null: Euclidean); for a block added before,
+  /// a manifold given here replaces its own (as ceres::Problem does).
   void addParameterBlock(double* x, int size, const ceres::Manifold* manifold = nullptr);
   /// A residual block; blocks not added yet are added (Euclidean, the cost's sizes).
   void addResidualBlock(const ceres::CostFunction* cost, const ceres::LossFunction* loss,

@@ -315,7 +315,11 @@ WindowSolverSummary Solver::run() {
   readState(x_);
   if (!linearize(true)) return s;
   s.usable = true;
-  s.initial_cost = x_cost_;
+  s.initial_cost = s.final_cost = x_cost_;
+  if (n_ == 0) {  // nothing to solve for (every block constant)
+    s.converged = true;
+    return s;
+  }
   radius_ = o_.initial_trust_region_radius;
   int invalid = 0, iteration = 0;
   last_successful_ = true;
