@@ -172,56 +172,44 @@ bool Solver::evaluate(bool jacobians, std::vector<double>& r, double& cost) {
 
 void Solver::multiplyJ(const VectorXd& v, VectorXd& out) const {
   out.setZero(rows_);
-  for (const Res& q : res_)
-    for (std::size_t k = 0; k < q.j_off.size(); ++k) {
-      if (q.j_off[k] < 0) continue;
-      const std::size_t b = static_cast<std::size_t>(q.def->blocks[k]);
-      const double* J = J_.data() + q.j_off[k];
-      const int t = tan_[b];
-      for (int i = 0; i < q.m; ++i) {
-        double s = 0;
-        for (int j = 0; j < t; ++j) s += J[i * t + j] * v(col_[b] + j);
-        out(q.r_off + i) += s;
-      }
+  forEachJacobian([&](const Res& q, int off, int t, int col) {
+    const double* J = J_.data() + off;
+    for (int i = 0; i < q.m; ++i) {
+      double s = 0;
+      for (int j = 0; j < t; ++j) s += J[i * t + j] * v(col + j);
+      out(q.r_off + i) += s;
     }
+  });
 }
 
 void Solver::multiplyJt(const std::vector<double>& r, VectorXd& out) const {
   out.setZero(n_);
-  for (const Res& q : res_)
-    for (std::size_t k = 0; k < q.j_off.size(); ++k) {
-      if (q.j_off[k] < 0) continue;
-      const std::size_t b = static_cast<std::size_t>(q.def->blocks[k]);
-      const double* J = J_.data() + q.j_off[k];
-      const int t = tan_[b];
-      for (int i = 0; i < q.m; ++i)
-        for (int j = 0; j < t; ++j) out(col_[b] + j) += J[i * t + j] * r[static_cast<std::size_t>(q.r_off + i)];
-    }
+  forEachJacobian([&](const Res& q, int off, int t, int col) {
+    const double* J = J_.data() + off;
+    for (int i = 0; i < q.m; ++i)
+      for (int j = 0; j < t; ++j) out(col + j) += J[i * t + j] * r[static_cast<std::size_t>(q.r_off + i)];
+  });
+}
+
+VectorXd Solver::squaredColumnNorms() const {
+  VectorXd sq = VectorXd::Zero(n_);
+  forEachJacobian([&](const Res& q, int off, int t, int col) {
+    const double* J = J_.data() + off;
+    for (int i = 0; i < q.m; ++i)
+      for (int j = 0; j < t; ++j) sq(col + j) += J[i * t + j] * J[i * t + j];
+  });
+  return sq;
 }
 
 /// Squared column norms at the first linearization give the Jacobi scaling 1/(1 + |J_c|); every
 /// Jacobian is then scaled by it (as Ceres' TrustRegionMinimizer).
 void Solver::scaleColumns(bool first) {
-  if (first) {
-    VectorXd sq = VectorXd::Zero(n_);
-    for (const Res& q : res_)
-      for (std::size_t k = 0; k < q.j_off.size(); ++k) {
-        if (q.j_off[k] < 0) continue;
-        const std::size_t b = static_cast<std::size_t>(q.def->blocks[k]);
-        const double* J = J_.data() + q.j_off[k];
-        for (int i = 0; i < q.m; ++i)
-          for (int j = 0; j < tan_[b]; ++j) sq(col_[b] + j) += J[i * tan_[b] + j] * J[i * tan_[b] + j];
-      }
-    scaling_ = (1.0 / (1.0 + sq.array().sqrt())).matrix();
-  }
-  for (const Res& q : res_)
-    for (std::size_t k = 0; k < q.j_off.size(); ++k) {
-      if (q.j_off[k] < 0) continue;
-      const std::size_t b = static_cast<std::size_t>(q.def->blocks[k]);
-      double* J = J_.data() + q.j_off[k];
-      for (int i = 0; i < q.m; ++i)
-        for (int j = 0; j < tan_[b]; ++j) J[i * tan_[b] + j] *= scaling_(col_[b] + j);
-    }
+  if (first) scaling_ = (1.0 / (1.0 + squaredColumnNorms().array().sqrt())).matrix();
+  forEachJacobian([&](const Res& q, int off, int t, int col) {
+    double* J = J_.data() + off;
+    for (int i = 0; i < q.m; ++i)
+      for (int j = 0; j < t; ++j) J[i * t + j] *= scaling_(col + j);
+  });
 }
 
 }  // namespace idyvins::backend::window

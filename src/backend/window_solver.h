@@ -46,6 +46,17 @@ class Solver {
   bool evaluate(bool jacobians, std::vector<double>& r, double& cost);
   bool evaluateResidual(const Res& q, bool jacobians, std::vector<double>& r, double& cost);
   void scaleColumns(bool first);
+  Eigen::VectorXd squaredColumnNorms() const;
+  /// f(residual, offset of the block's Jacobian in J_, tangent size, first column) for every solved block.
+  template <class F>
+  void forEachJacobian(F f) const {
+    for (const Res& q : res_)
+      for (std::size_t k = 0; k < q.j_off.size(); ++k) {
+        if (q.j_off[k] < 0) continue;
+        const std::size_t b = static_cast<std::size_t>(q.def->blocks[k]);
+        f(q, q.j_off[k], tan_[b], col_[b]);
+      }
+  }
   void multiplyJ(const Eigen::VectorXd& v, Eigen::VectorXd& out) const;
   void multiplyJt(const std::vector<double>& r, Eigen::VectorXd& out) const;
   bool solveNormal(const Eigen::VectorXd& lm2, Eigen::VectorXd& y);

@@ -202,15 +202,7 @@ bool Solver::solveNormal(const VectorXd& lm2, VectorXd& y) {
 bool Solver::computeStep(VectorXd& step) {
   if (!reuse_) {
     reuse_ = true;
-    VectorXd sq = VectorXd::Zero(n_);
-    for (const Res& q : res_)
-      for (std::size_t k = 0; k < q.j_off.size(); ++k) {
-        if (q.j_off[k] < 0) continue;
-        const std::size_t b = static_cast<std::size_t>(q.def->blocks[k]);
-        const double* J = J_.data() + q.j_off[k];
-        for (int i = 0; i < q.m; ++i)
-          for (int j = 0; j < tan_[b]; ++j) sq(col_[b] + j) += J[i * tan_[b] + j] * J[i * tan_[b] + j];
-      }
+    const VectorXd sq = squaredColumnNorms();
     diag_ = sq.cwiseMax(kMinDiagonal).cwiseMin(kMaxDiagonal).cwiseSqrt();
     multiplyJt(r_, b_);
     grad_ = b_.cwiseQuotient(diag_);
