@@ -10,10 +10,47 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 
 namespace idyvins::backend::window {
 
 using Eigen::VectorXd;
+
+namespace {
+
+/// Calls f with the tangent width t as a compile-time constant for the window's common widths
+/// (1: an inverse depth or the time offset, 6: a pose, 9: speed and biases), else as an int, so
+/// that the kernels below unroll and vectorize over a block's columns. Every kernel keeps the
+/// order of the additions into each output element (rows in order), so results do not change.
+template <class F>
+void withWidth(int t, F f) {
+  switch (t) {
+    case 1:
+      return f(std::integral_constant<int, 1>());
+    case 6:
+      return f(std::integral_constant<int, 6>());
+    case 9:
+      return f(std::integral_constant<int, 9>());
+    default:
+      return f(t);
+  }
+}
+
+/// The first t columns of a row-major m x size Jacobian into out (m x t); false at a value
+/// that is not finite.
+template <class T>
+bool copyTangent(const double* __restrict in, int size, int m, T t, double* __restrict out) {
+  bool finite = true;
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < t; ++j) {
+      const double v = in[i * size + j];
+      finite = finite && std::isfinite(v);
+      out[i * t + j] = v;
+    }
+  return finite;
+}
+
+}  // namespace
 
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
@@ -142,12 +179,9 @@ bool Solver::evaluateResidual(const Res& q, bool jacobians, std::vector<double>&
       if (!jac[k]) continue;
       const int size = blocks[def.blocks[k]].size, t = tan_[static_cast<std::size_t>(def.blocks[k])];
       double* out = J_.data() + q.j_off[k];
-      for (int i = 0; i < q.m; ++i)
-        for (int j = 0; j < t; ++j) {
-          const double v = jac[k][i * size + j];
-          if (!std::isfinite(v)) return false;
-          out[i * t + j] = v;
-        }
+      bool finite = true;
+      withWidth(t, [&](auto w) { finite = copyTangent(jac[k], size, q.m, w, out); });
+      if (!finite) return false;
       if (!def.loss) continue;
       for (int j = 0; j < t; ++j) {
         double rj = 0;
@@ -170,33 +204,59 @@ bool Solver::evaluate(bool jacobians, std::vector<double>& r, double& cost) {
   return ok && std::isfinite(cost);
 }
 
+namespace {
+
+/// out (m) += J v for row-major J (m x t).
+template <class T>
+void addJv(const double* __restrict J, int m, T t, const double* __restrict v, double* __restrict out) {
+  for (int i = 0; i < m; ++i) {
+    double s = 0;
+    for (int j = 0; j < t; ++j) s += J[i * t + j] * v[j];
+    out[i] += s;
+  }
+}
+
+/// out (t) += Jᵀ r.
+template <class T>
+void addJtr(const double* __restrict J, int m, T t, const double* __restrict r, double* __restrict out) {
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < t; ++j) out[j] += J[i * t + j] * r[i];
+}
+
+/// out (t) += the squares of J's columns.
+template <class T>
+void addSquares(const double* __restrict J, int m, T t, double* __restrict out) {
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < t; ++j) out[j] += J[i * t + j] * J[i * t + j];
+}
+
+/// J's columns times s (t).
+template <class T>
+void scaleBy(double* __restrict J, int m, T t, const double* __restrict s) {
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < t; ++j) J[i * t + j] *= s[j];
+}
+
+}  // namespace
+
 void Solver::multiplyJ(const VectorXd& v, VectorXd& out) const {
   out.setZero(rows_);
   forEachJacobian([&](const Res& q, int off, int t, int col) {
-    const double* J = J_.data() + off;
-    for (int i = 0; i < q.m; ++i) {
-      double s = 0;
-      for (int j = 0; j < t; ++j) s += J[i * t + j] * v(col + j);
-      out(q.r_off + i) += s;
-    }
+    withWidth(t, [&](auto w) { addJv(J_.data() + off, q.m, w, v.data() + col, out.data() + q.r_off); });
   });
 }
 
 void Solver::multiplyJt(const std::vector<double>& r, VectorXd& out) const {
   out.setZero(n_);
   forEachJacobian([&](const Res& q, int off, int t, int col) {
-    const double* J = J_.data() + off;
-    for (int i = 0; i < q.m; ++i)
-      for (int j = 0; j < t; ++j) out(col + j) += J[i * t + j] * r[static_cast<std::size_t>(q.r_off + i)];
+    withWidth(t, [&](auto w) { addJtr(J_.data() + off, q.m, w, r.data() + q.r_off, out.data() + col); });
   });
 }
 
 VectorXd Solver::squaredColumnNorms() const {
   VectorXd sq = VectorXd::Zero(n_);
   forEachJacobian([&](const Res& q, int off, int t, int col) {
-    const double* J = J_.data() + off;
-    for (int i = 0; i < q.m; ++i)
-      for (int j = 0; j < t; ++j) sq(col + j) += J[i * t + j] * J[i * t + j];
+    withWidth(t, [&](auto w) { addSquares(J_.data() + off, q.m, w, sq.data() + col); });
   });
   return sq;
 }
@@ -206,9 +266,7 @@ VectorXd Solver::squaredColumnNorms() const {
 void Solver::scaleColumns(bool first) {
   if (first) scaling_ = (1.0 / (1.0 + squaredColumnNorms().array().sqrt())).matrix();
   forEachJacobian([&](const Res& q, int off, int t, int col) {
-    double* J = J_.data() + off;
-    for (int i = 0; i < q.m; ++i)
-      for (int j = 0; j < t; ++j) J[i * t + j] *= scaling_(col + j);
+    withWidth(t, [&](auto w) { scaleBy(J_.data() + off, q.m, w, scaling_.data() + col); });
   });
 }
 

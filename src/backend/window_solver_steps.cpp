@@ -24,7 +24,8 @@ constexpr double kMinRadius = 1e-32, kMinRelativeDecrease = 1e-3;
 constexpr int kMaxInvalidSteps = 5;
 
 template <int A, int B, int M>
-void addAtBFixed(const double* Ap, const double* Bp, double* out, int ld, double sign) {
+void addAtBFixed(const double* __restrict Ap, const double* __restrict Bp, double* __restrict out, int ld,
+                 double sign) {
   for (int r = 0; r < M; ++r)
     for (int i = 0; i < A; ++i) {
       const double s = sign * Ap[r * A + i];
@@ -35,7 +36,8 @@ void addAtBFixed(const double* Ap, const double* Bp, double* out, int ld, double
 
 /// out (a x b, row stride ld) += sign · Aᵀ B for row-major A (m x a) and B (m x b); the window's
 /// common shapes (a projection's 2 rows by two poses, a landmark's coupling) unrolled, same sums.
-void addAtB(const double* A, int a, const double* B, int b, int m, double* out, int ld, double sign = 1.0) {
+void addAtB(const double* __restrict A, int a, const double* __restrict B, int b, int m, double* __restrict out, int ld,
+            double sign = 1.0) {
   if (a == 6 && b == 6 && m == 2) return addAtBFixed<6, 6, 2>(A, B, out, ld, sign);
   if (a == 6 && b == 6 && m == 1) return addAtBFixed<6, 6, 1>(A, B, out, ld, sign);
   if (a == 1 && b == 6 && m == 2) return addAtBFixed<1, 6, 2>(A, B, out, ld, sign);
