@@ -4,8 +4,8 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "backend/parameter_blocks.h"
 #include "core/so3.h"
@@ -15,23 +15,40 @@ namespace idyvins::backend {
 namespace {
 int tangentSize(int size) { return size == kPoseSize ? kPoseTangentSize : size; }
 
-/// Evaluates a term: weighted residual and tangent Jacobians (robust loss folded
-/// in with Triggs' correction, as Ceres does).
-void linearize(const MarginalizationTerm& t, Eigen::VectorXd& r, std::vector<Eigen::MatrixXd>& J) {
+/// A term's weighted residual and tangent Jacobians (row-major, m x tangent size per block, one
+/// after the other in `jac`); buffers reused from term to term.
+struct Linearized {
+  std::vector<double> r, raw, jac;
+  std::vector<int> jac_off, tangent;
+};
+
+/// Evaluates a term into `out` (robust loss folded in with Triggs' correction, as Ceres does).
+void linearize(const MarginalizationTerm& t, Linearized& out) {
   const auto& sizes = t.cost->parameter_block_sizes();
   const int m = t.cost->num_residuals();
-  r.resize(m);
-  std::vector<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> raw(sizes.size());
-  std::vector<double*> raw_ptrs(sizes.size());
-  for (std::size_t k = 0; k < sizes.size(); ++k) {
-    raw[k].resize(m, sizes[k]);
-    raw_ptrs[k] = raw[k].data();
+  const std::size_t nb = sizes.size();
+  std::size_t raw_size = 0, jac_size = 0;
+  out.jac_off.resize(nb);
+  out.tangent.resize(nb);
+  for (std::size_t k = 0; k < nb; ++k) {
+    out.tangent[k] = tangentSize(sizes[k]);
+    out.jac_off[k] = static_cast<int>(jac_size);
+    raw_size += static_cast<std::size_t>(m * sizes[k]);
+    jac_size += static_cast<std::size_t>(m * out.tangent[k]);
   }
-  if (!t.cost->Evaluate(t.blocks.data(), r.data(), raw_ptrs.data()))
+  out.r.resize(static_cast<std::size_t>(m));
+  out.raw.resize(raw_size);
+  out.jac.resize(jac_size);
+  std::vector<double*> raw_ptrs(nb);
+  for (std::size_t k = 0, at = 0; k < nb; at += static_cast<std::size_t>(m * sizes[k]), ++k)
+    raw_ptrs[k] = out.raw.data() + at;
+  if (!t.cost->Evaluate(t.blocks.data(), out.r.data(), raw_ptrs.data()))
     throw std::runtime_error("marginalization: a residual block failed to evaluate");
-  J.resize(sizes.size());
-  for (std::size_t k = 0; k < sizes.size(); ++k) J[k] = raw[k].leftCols(tangentSize(sizes[k]));
+  for (std::size_t k = 0; k < nb; ++k)
+    for (int i = 0; i < m; ++i)
+      std::copy_n(raw_ptrs[k] + i * sizes[k], out.tangent[k], out.jac.data() + out.jac_off[k] + i * out.tangent[k]);
   if (!t.loss) return;
+  Eigen::Map<Eigen::VectorXd> r(out.r.data(), m);
   const double sq = r.squaredNorm();
   double rho[3];
   t.loss->Evaluate(sq, rho);
@@ -43,7 +60,12 @@ void linearize(const MarginalizationTerm& t, Eigen::VectorXd& r, std::vector<Eig
     residual_scaling = sqrt_rho1 / (1.0 - alpha);
     alpha_sq_norm = alpha / sq;
   }
-  for (auto& Jk : J) Jk = sqrt_rho1 * (Jk - alpha_sq_norm * r * (r.transpose() * Jk));
+  for (std::size_t k = 0; k < nb; ++k) {
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Jk(
+        out.jac.data() + out.jac_off[k], m, out.tangent[k]);
+    const Eigen::RowVectorXd rJ = r.transpose() * Jk;
+    Jk = sqrt_rho1 * (Jk - alpha_sq_norm * r * rJ);
+  }
   r *= residual_scaling;
 }
 
@@ -79,7 +101,7 @@ namespace {
 /// with their sizes and the offset of each in the tangent vector.
 struct BlockOrder {
   std::vector<double*> dropped, kept;
-  std::map<double*, int> size_of, index;
+  std::unordered_map<double*, int> size_of, index;
   int m = 0, n = 0;  ///< tangent dimensions of the dropped and the kept part
 };
 
@@ -109,23 +131,61 @@ BlockOrder orderBlocks(const std::vector<MarginalizationTerm>& terms) {
   return o;
 }
 
+/// H (column-major, leading dimension ld) block at (row ia, column ib) += Aᵀ B for row-major A
+/// (m x a) and B (m x b); the column loop vectorizes.
+void addAtB(const double* __restrict A, int a, const double* __restrict B, int b, int m, double* __restrict H,
+            Eigen::Index ld, int ia, int ib) {
+  for (int r = 0; r < m; ++r)
+    for (int j = 0; j < b; ++j) {
+      const double s = B[r * b + j];
+      double* col = H + (ib + j) * ld + ia;
+      const double* ar = A + r * a;
+      for (int i = 0; i < a; ++i) col[i] += ar[i] * s;
+    }
+}
+
+/// A tall term (the previous prior): its JᵀJ through one dense product, scattered into H.
+void addTall(const Linearized& l, int m, const std::vector<int>& at, Eigen::MatrixXd& H) {
+  int cols = 0;
+  for (int t : l.tangent) cols += t;
+  Eigen::MatrixXd A(m, cols);
+  for (std::size_t k = 0, c = 0; k < at.size(); c += static_cast<std::size_t>(l.tangent[k]), ++k)
+    A.middleCols(static_cast<Eigen::Index>(c), l.tangent[k]) =
+        Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+            l.jac.data() + l.jac_off[k], m, l.tangent[k]);
+  Eigen::MatrixXd AtA(cols, cols);
+  AtA.noalias() = A.transpose() * A;
+  for (std::size_t k1 = 0, c1 = 0; k1 < at.size(); c1 += static_cast<std::size_t>(l.tangent[k1]), ++k1)
+    for (std::size_t k2 = 0, c2 = 0; k2 < at.size(); c2 += static_cast<std::size_t>(l.tangent[k2]), ++k2)
+      H.block(at[k1], at[k2], l.tangent[k1], l.tangent[k2]) +=
+          AtA.block(static_cast<Eigen::Index>(c1), static_cast<Eigen::Index>(c2), l.tangent[k1], l.tangent[k2]);
+}
+
 /// The Gauss-Newton system H δ = -g of all terms in the block order.
 void accumulate(const std::vector<MarginalizationTerm>& terms, BlockOrder& o, Eigen::MatrixXd& H, Eigen::VectorXd& g) {
   H = Eigen::MatrixXd::Zero(o.m + o.n, o.m + o.n);
   g = Eigen::VectorXd::Zero(o.m + o.n);
+  Linearized l;
+  std::vector<int> at;
   for (const auto& t : terms) {
-    Eigen::VectorXd r;
-    std::vector<Eigen::MatrixXd> J;
-    linearize(t, r, J);
-    for (std::size_t a = 0; a < t.blocks.size(); ++a) {
-      const int ia = o.index[t.blocks[a]];
-      const int sa = static_cast<int>(J[a].cols());
-      g.segment(ia, sa) += J[a].transpose() * r;
-      for (std::size_t b = 0; b < t.blocks.size(); ++b) {
-        const int ib = o.index[t.blocks[b]];
-        H.block(ia, ib, sa, J[b].cols()) += J[a].transpose() * J[b];
-      }
+    linearize(t, l);
+    const int m = static_cast<int>(l.r.size());
+    at.resize(t.blocks.size());
+    for (std::size_t k = 0; k < t.blocks.size(); ++k) at[k] = o.index.at(t.blocks[k]);
+    for (std::size_t k = 0; k < t.blocks.size(); ++k) {
+      const double* J = l.jac.data() + l.jac_off[k];
+      for (int i = 0; i < m; ++i)
+        for (int j = 0; j < l.tangent[k]; ++j)
+          g(at[k] + j) += J[i * l.tangent[k] + j] * l.r[static_cast<std::size_t>(i)];
     }
+    if (m > 16) {
+      addTall(l, m, at, H);
+      continue;
+    }
+    for (std::size_t a = 0; a < t.blocks.size(); ++a)
+      for (std::size_t b = 0; b < t.blocks.size(); ++b)
+        addAtB(l.jac.data() + l.jac_off[a], l.tangent[a], l.jac.data() + l.jac_off[b], l.tangent[b], m, H.data(),
+               H.rows(), at[a], at[b]);
   }
 }
 
