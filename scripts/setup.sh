@@ -10,6 +10,8 @@ DEMO_PACKAGES=(
   build-essential cmake pkg-config python3
   libeigen3-dev libceres-dev libopencv-dev libyaml-cpp-dev
   libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev
+  # 8-bit gray PNGs (EuRoC's cameras) inflated by libdeflate, the rest by OpenCV
+  libdeflate-dev
   # ROS1 bags without a ROS installation: rosbag_storage, the message headers, and the
   # headers its bag.h includes (pluginlib from ROS 2 in Debian)
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev

@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "io/bag_file.h"
+#include "io/png_gray.h"
 
 namespace idyvins::io {
 
@@ -96,6 +97,10 @@ cv::Mat toGray(const BagImage& m) {
   checkImageFormat(m);
   cv::Mat gray;
   if (m.compressed) {
+    std::string why;
+    const GrayPng kind = decodeGrayPng(m.data, m.size, gray, why);
+    if (kind == GrayPng::kCorrupt) throw BagMessageError("the " + m.format + " data is a corrupt PNG: " + why);
+    if (kind == GrayPng::kDecoded) return gray;
     const cv::Mat decoded = cv::imdecode(cv::Mat(1, static_cast<int>(m.size), CV_8U, const_cast<std::uint8_t*>(m.data)),
                                          cv::IMREAD_UNCHANGED);
     if (decoded.empty() || decoded.depth() != CV_8U)

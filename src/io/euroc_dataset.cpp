@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "io/csv.h"
+#include "io/png_gray.h"
 
 namespace fs = std::filesystem;
 
@@ -181,7 +182,12 @@ cv::Mat loadGrayImage(const ImageRecord& record, const std::string& csv_path, in
   if (bytes.size() >= 8 && std::equal(kPngSignature, kPngSignature + 8, bytes.begin()) &&
       (bytes.size() < 20 || !std::equal(kIend, kIend + 8, bytes.end() - 8)))
     throw InputError(csv_path, record.csv_line, "truncated PNG (no IEND chunk at its end): " + record.path);
-  cv::Mat image = bytes.empty() ? cv::Mat() : cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
+  cv::Mat image;
+  std::string why;
+  const GrayPng kind = bytes.empty() ? GrayPng::kOtherKind : decodeGrayPng(bytes.data(), bytes.size(), image, why);
+  if (kind == GrayPng::kCorrupt)
+    throw InputError(csv_path, record.csv_line, "image file unreadable (a corrupt PNG: " + why + "): " + record.path);
+  if (kind == GrayPng::kOtherKind && !bytes.empty()) image = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
   if (image.empty())
     throw InputError(csv_path, record.csv_line, "image file unreadable (expected an 8-bit PNG): " + record.path);
   if (expected_width > 0 && (image.cols != expected_width || image.rows != expected_height)) {
