@@ -60,7 +60,9 @@ void linearize(const MarginalizationTerm& t, Linearized& out) {
     residual_scaling = sqrt_rho1 / (1.0 - alpha);
     alpha_sq_norm = alpha / sq;
   }
-  for (std::size_t k = 0; k < nb; ++k) {
+  for (std::size_t k = 0; k < nb && alpha_sq_norm == 0.0; ++k)  // Huber's case (ρ'' ≤ 0): only the scaling
+    for (int i = 0; i < m * out.tangent[k]; ++i) out.jac[static_cast<std::size_t>(out.jac_off[k] + i)] *= sqrt_rho1;
+  for (std::size_t k = 0; k < nb && alpha_sq_norm != 0.0; ++k) {
     Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Jk(
         out.jac.data() + out.jac_off[k], m, out.tangent[k]);
     const Eigen::RowVectorXd rJ = r.transpose() * Jk;

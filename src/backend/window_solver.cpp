@@ -183,6 +183,11 @@ bool Solver::evaluateResidual(const Res& q, bool jacobians, std::vector<double>&
       withWidth(t, [&](auto w) { finite = copyTangent(jac[k], size, q.m, w, out); });
       if (!finite) return false;
       if (!def.loss) continue;
+      if (alpha_sq == 0.0) {  // as Ceres' Corrector: only the scaling (always so for Huber, whose ρ'' ≤ 0)
+        if (sqrt_rho1 != 1.0)
+          for (int i = 0; i < q.m * t; ++i) out[i] *= sqrt_rho1;
+        continue;
+      }
       for (int j = 0; j < t; ++j) {
         double rj = 0;
         for (int i = 0; i < q.m; ++i) rj += res[i] * out[i * t + j];
