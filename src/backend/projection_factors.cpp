@@ -49,48 +49,42 @@ namespace {
 bool evaluateTwoFrame(const Vector3d& pts_i, const Vector3d& pts_j, const Extrinsic& ex0, const Extrinsic& exb,
                       const ProjectionWeight& weight, double const* const* parameters, double* residuals,
                       double** jacobians, Eigen::Matrix<double, 2, 3>* d_pts_i = nullptr) {
-  const Eigen::Map<const Vector3d> Pi(parameters[0]);
-  const Quaterniond Qi = Eigen::Map<const Quaterniond>(parameters[0] + 3).normalized();
-  const Eigen::Map<const Vector3d> Pj(parameters[1]);
-  const Quaterniond Qj = Eigen::Map<const Quaterniond>(parameters[1] + 3).normalized();
+  // Rotation matrices once (a quaternion rotates a vector in about twice the operations of a
+  // matrix), and the Jacobians as 2x3 blocks: the projection's reduction applied first.
+  const Eigen::Map<const Vector3d> Pi(parameters[0]), Pj(parameters[1]);
+  const Matrix3d Ri = Eigen::Map<const Quaterniond>(parameters[0] + 3).normalized().toRotationMatrix();
+  const Matrix3d Rj = Eigen::Map<const Quaterniond>(parameters[1] + 3).normalized().toRotationMatrix();
+  const Matrix3d R_b_ca = ex0.q_b_c.toRotationMatrix(), R_cb_b = exb.q_b_c.toRotationMatrix().transpose();
   const double inv_dep = parameters[2][0];
-  const Extrinsic& a = ex0;
-  const Extrinsic& b = exb;
-  const Vector3d pts_cam_i = pts_i / inv_dep;
-  const Vector3d pts_imu_i = a.q_b_c * pts_cam_i + a.t_b_c;
-  const Vector3d pts_w = Qi * pts_imu_i + Pi;
-  const Vector3d pts_imu_j = Qj.conjugate() * (pts_w - Pj);
-  const Vector3d pts_cam_j = b.q_b_c.conjugate() * (pts_imu_j - b.t_b_c);
+  const Vector3d pts_imu_i = R_b_ca * (pts_i / inv_dep) + ex0.t_b_c;
+  const Vector3d pts_imu_j = Rj.transpose() * (Ri * pts_imu_i + Pi - Pj);
+  const Vector3d pts_cam_j = R_cb_b * (pts_imu_j - exb.t_b_c);
   const double sqrt_info = weight.sqrtInfo();
   Eigen::Map<Vector2d> r(residuals);
   r = sqrt_info * (pts_cam_j.head<2>() / pts_cam_j.z() - pts_j.head<2>());
   if (!jacobians) return true;
 
-  const Matrix3d Ri = Qi.toRotationMatrix(), Rj = Qj.toRotationMatrix();
-  const Matrix3d Rca_b = a.q_b_c.toRotationMatrix();
-  const Matrix3d Rb_cb_T = b.q_b_c.conjugate().toRotationMatrix();
   const Eigen::Matrix<double, 2, 3> reduce = reduceJacobian(pts_cam_j, sqrt_info);
+  const Eigen::Matrix<double, 2, 3> d_p_bj = reduce * (R_cb_b * Rj.transpose());  // by the point in the world
+  const Eigen::Matrix<double, 2, 3> d_p_bi = d_p_bj * Ri;                         // by the point in body i
   if (jacobians[0]) {
     Eigen::Map<PoseJac> J(jacobians[0]);
-    Eigen::Matrix<double, 3, 6> jaco;
-    jaco.leftCols<3>() = Rb_cb_T * Rj.transpose();
-    jaco.rightCols<3>() = Rb_cb_T * Rj.transpose() * Ri * -hat(pts_imu_i);
-    J.leftCols<6>() = reduce * jaco;
+    J.leftCols<3>() = d_p_bj;
+    J.middleCols<3>(3) = -d_p_bi * hat(pts_imu_i);
     J.rightCols<1>().setZero();
   }
   if (jacobians[1]) {
     Eigen::Map<PoseJac> J(jacobians[1]);
-    Eigen::Matrix<double, 3, 6> jaco;
-    jaco.leftCols<3>() = -Rb_cb_T * Rj.transpose();
-    jaco.rightCols<3>() = Rb_cb_T * hat(pts_imu_j);
-    J.leftCols<6>() = reduce * jaco;
+    J.leftCols<3>() = -d_p_bj;
+    J.middleCols<3>(3) = (reduce * R_cb_b) * hat(pts_imu_j);
     J.rightCols<1>().setZero();
   }
+  const Eigen::Matrix<double, 2, 3> d_p_ca = d_p_bi * R_b_ca;  // by the point in camera a
   if (jacobians[2]) {
     Eigen::Map<Vector2d> J(jacobians[2]);
-    J = reduce * Rb_cb_T * Rj.transpose() * Ri * Rca_b * pts_i * (-1.0 / (inv_dep * inv_dep));
+    J = d_p_ca * pts_i * (-1.0 / (inv_dep * inv_dep));
   }
-  if (d_pts_i) *d_pts_i = reduce * Rb_cb_T * Rj.transpose() * Ri * Rca_b / inv_dep;
+  if (d_pts_i) *d_pts_i = d_p_ca / inv_dep;
   return true;
 }
 
