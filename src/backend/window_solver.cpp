@@ -50,6 +50,21 @@ bool copyTangent(const double* __restrict in, int size, int m, T t, double* __re
   return finite;
 }
 
+/// Ceres' Corrector on a row-major m x t Jacobian: sqrt(ρ') (J − α/|r|² r rᵀ J); only the scaling
+/// when α is 0 (always so for Huber, whose ρ'' ≤ 0).
+void correctJacobian(const double* res, int m, int t, double sqrt_rho1, double alpha_sq, double* out) {
+  if (alpha_sq == 0.0) {
+    if (sqrt_rho1 != 1.0)
+      for (int i = 0; i < m * t; ++i) out[i] *= sqrt_rho1;
+    return;
+  }
+  for (int j = 0; j < t; ++j) {
+    double rj = 0;
+    for (int i = 0; i < m; ++i) rj += res[i] * out[i * t + j];
+    for (int i = 0; i < m; ++i) out[i * t + j] = sqrt_rho1 * (out[i * t + j] - alpha_sq * res[i] * rj);
+  }
+}
+
 }  // namespace
 
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
@@ -182,17 +197,7 @@ bool Solver::evaluateResidual(const Res& q, bool jacobians, std::vector<double>&
       bool finite = true;
       withWidth(t, [&](auto w) { finite = copyTangent(jac[k], size, q.m, w, out); });
       if (!finite) return false;
-      if (!def.loss) continue;
-      if (alpha_sq == 0.0) {  // as Ceres' Corrector: only the scaling (always so for Huber, whose ρ'' ≤ 0)
-        if (sqrt_rho1 != 1.0)
-          for (int i = 0; i < q.m * t; ++i) out[i] *= sqrt_rho1;
-        continue;
-      }
-      for (int j = 0; j < t; ++j) {
-        double rj = 0;
-        for (int i = 0; i < q.m; ++i) rj += res[i] * out[i * t + j];
-        for (int i = 0; i < q.m; ++i) out[i * t + j] = sqrt_rho1 * (out[i * t + j] - alpha_sq * res[i] * rj);
-      }
+      if (def.loss) correctJacobian(res, q.m, t, sqrt_rho1, alpha_sq, out);
     }
   }
   for (int i = 0; i < q.m; ++i) res[i] *= r_scale;
