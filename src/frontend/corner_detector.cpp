@@ -1,5 +1,6 @@
 #include "frontend/corner_detector.h"
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -46,6 +47,8 @@ class ResponseRows {
     const int wc = region.width + 2;  // tensor columns: the region plus one on each side
     for (auto& r : rows_) r.resize(3 * static_cast<std::size_t>(wc));
     for (auto& r : sums_) r.resize(3 * static_cast<std::size_t>(region.width));
+    for (auto* v : {&a_, &b_, &c_})
+      if (v->size() < region.width) v->resize(region.width);
     // Scale of OpenCV's responses for 8-bit images: gradients / (4 * 3 * 255).
     constexpr double kScale2 = 1.0 / (3060.0 * 3060.0);
     for (int cy = region.y - 1; cy <= region.y + region.height; ++cy) {
@@ -54,17 +57,21 @@ class ResponseRows {
       horizontalSums(rows_[k], region.width, sums_[k]);
       if (cy < region.y + 1) continue;
       // Rows cy-2, cy-1, cy are in the window: the output row is cy - 1.
-      const std::int32_t* s0 = sums_[0].data();
-      const std::int32_t* s1 = sums_[1].data();
-      const std::int32_t* s2 = sums_[2].data();
-      float* out = eig.ptr<float>(cy - 1) + region.x;
-      const std::size_t w = static_cast<std::size_t>(region.width);
-      for (std::size_t i = 0; i < w; ++i) {
-        const double a = 0.5 * (s0[i] + s1[i] + s2[i]);
-        const double b = s0[w + i] + s1[w + i] + s2[w + i];
-        const double c = 0.5 * (s0[2 * w + i] + s1[2 * w + i] + s2[2 * w + i]);
-        out[i] = static_cast<float>(kScale2 * ((a + c) - std::sqrt((a - c) * (a - c) + b * b)));
-      }
+      // Element-wise array expressions (Eigen vectorizes them, the square root too): the same
+      // operations in the same order per pixel, so the same values as a scalar loop.
+      const Eigen::Index w = region.width;
+      using Row = Eigen::Map<const Eigen::ArrayXi>;
+      const auto sum = [&](Eigen::Index part) {
+        return (Row(sums_[0].data() + part * w, w) + Row(sums_[1].data() + part * w, w) +
+                Row(sums_[2].data() + part * w, w))
+            .cast<double>();
+      };
+      auto a = a_.head(w), b = b_.head(w), c = c_.head(w);
+      a = 0.5 * sum(0);
+      b = sum(1);
+      c = 0.5 * sum(2);
+      Eigen::Map<Eigen::ArrayXf>(eig.ptr<float>(cy - 1) + region.x, w) =
+          (kScale2 * ((a + c) - ((a - c) * (a - c) + b * b).sqrt())).cast<float>();
     }
   }
 
@@ -95,6 +102,7 @@ class ResponseRows {
     }
   }
   std::vector<std::int32_t> rows_[3], sums_[3];
+  Eigen::ArrayXd a_, b_, c_;  ///< the tensor's halved diagonal sums and its off-diagonal sum, one row
 };
 
 /// Responses on every run of open tiles, plus the one-pixel ring the 3x3 suppression reads.
