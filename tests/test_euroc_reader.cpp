@@ -200,6 +200,18 @@ TEST_F(TinyEuroc, MissingOrUnreadableImage) {
     }
   };
   expectError(drain, "cam1/data.csv:3: image file unreadable");
+  // A gray PNG with one byte of its image data flipped: refused by its CRC, with the chunk named.
+  std::vector<unsigned char> png;
+  ASSERT_TRUE(cv::imencode(".png", cv::Mat(8, 16, CV_8UC1, cv::Scalar(90)), png));
+  png[33 + 8 + 2] ^= 0x40;
+  writeFile(csv("cam1/data/1050.png"), std::string(png.begin(), png.end()));
+  EurocSource again(ds, 16, 8);
+  expectError(
+      [&] {
+        while (again.next()) {
+        }
+      },
+      "cam1/data.csv:3: image file unreadable (a corrupt PNG: CRC mismatch in the IDAT chunk at byte 33)");
 }
 
 TEST_F(TinyEuroc, UnmatchedFramesAreReportedNotErrors) {
