@@ -20,6 +20,7 @@ int tangentSize(int size) { return size == kPoseSize ? kPoseTangentSize : size; 
 struct Linearized {
   std::vector<double> r, raw, jac;
   std::vector<int> jac_off, tangent;
+  std::vector<double*> raw_ptrs;
 };
 
 /// Evaluates a term into `out` (robust loss folded in with Triggs' correction, as Ceres does).
@@ -39,7 +40,8 @@ void linearize(const MarginalizationTerm& t, Linearized& out) {
   out.r.resize(static_cast<std::size_t>(m));
   out.raw.resize(raw_size);
   out.jac.resize(jac_size);
-  std::vector<double*> raw_ptrs(nb);
+  auto& raw_ptrs = out.raw_ptrs;
+  raw_ptrs.resize(nb);
   for (std::size_t k = 0, at = 0; k < nb; at += static_cast<std::size_t>(m * sizes[k]), ++k)
     raw_ptrs[k] = out.raw.data() + at;
   if (!t.cost->Evaluate(t.blocks.data(), out.r.data(), raw_ptrs.data()))
@@ -60,9 +62,12 @@ void linearize(const MarginalizationTerm& t, Linearized& out) {
     residual_scaling = sqrt_rho1 / (1.0 - alpha);
     alpha_sq_norm = alpha / sq;
   }
-  for (std::size_t k = 0; k < nb && alpha_sq_norm == 0.0; ++k)  // Huber's case (ρ'' ≤ 0): only the scaling
-    for (int i = 0; i < m * out.tangent[k]; ++i) out.jac[static_cast<std::size_t>(out.jac_off[k] + i)] *= sqrt_rho1;
-  for (std::size_t k = 0; k < nb && alpha_sq_norm != 0.0; ++k) {
+  if (alpha_sq_norm == 0.0) {  // Huber's case (ρ'' ≤ 0): only the scaling, of every block at once
+    for (double& v : out.jac) v *= sqrt_rho1;
+    r *= residual_scaling;
+    return;
+  }
+  for (std::size_t k = 0; k < nb; ++k) {
     Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Jk(
         out.jac.data() + out.jac_off[k], m, out.tangent[k]);
     const Eigen::RowVectorXd rJ = r.transpose() * Jk;
